@@ -1,0 +1,288 @@
+"""Unit tests of the shared geometric predicates on hand-built states (no physics)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from capmj.sim.objects import BOWL_HEIGHT, ObjectSpec
+from capmj.sim.state import Pose, SceneState
+from capmj.tasks import predicates as P
+from capmj.tasks.protocol import OracleGoal, Target
+
+
+def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def tilt_quat(angle: float) -> tuple[float, float, float, float]:
+    """Rotation about world x by ``angle`` (w, x, y, z)."""
+    return (math.cos(angle / 2), math.sin(angle / 2), 0.0, 0.0)
+
+
+def block(i: int, pos, size: str = "small", color: str = "red") -> ObjectSpec:
+    return ObjectSpec(i, "block", color, tuple(pos), size=size)
+
+
+def state_of(objs, poses: dict | None = None) -> SceneState:
+    s = SceneState.from_specs(objs)
+    if poses:
+        p = dict(s.poses)
+        for k, v in poses.items():
+            p[k] = v if isinstance(v, Pose) else Pose(tuple(v))
+        s = SceneState(s.objects, p)
+    return s
+
+
+# --------------------------------------------------------------------------------------- areas
+def test_area_bounds_and_names():
+    assert P.area_bounds("top left") == (0.25, 0.5, -0.5, 0.0)
+    assert P.area_bounds("left-top area") == (0.25, 0.5, -0.5, 0.0)
+    assert P.area_bounds("bottom") == (0.5, 0.75, -0.5, 0.5)
+    assert P.area_bounds("right") == (0.25, 0.75, 0.0, 0.5)
+    for bad in ("middle", "", "top bottom", "left left"):
+        with pytest.raises(ValueError):
+            P.area_bounds(bad)
+
+
+@pytest.mark.parametrize(
+    "pos,area,expected",
+    [
+        ((0.3, -0.2), "top left", True),
+        ((0.3, -0.2), "top right", False),
+        ((0.6, -0.2), "bottom left", True),
+        ((0.6, 0.2), "bottom right", True),
+        ((0.6, 0.2), "top", False),
+        ((0.4, 0.0), "left", False),  # on the split line: neither half
+        ((0.4, 0.0), "right", False),
+        ((0.5, 0.1), "top", False),
+        ((0.25, -0.5), "top left", True),  # workspace corner is inclusive
+        ((0.8, 0.1), "bottom right", False),  # off the workspace
+        ((0.6, 0.1), (0.5, 0.7, 0.0, 0.2), True),
+    ],
+)
+def test_in_area(pos, area, expected):
+    assert P.in_area(pos, area) is expected
+
+
+# --------------------------------------------------------------------------------------- zones
+def _zone_state(yaw=0.0, scale=1.0, block_xy=(0.5, 0.0)):
+    zone = ObjectSpec(1, "zone", "green", (0.5, 0.0, 0.0005), yaw=yaw, scale=scale)
+    b = block(2, (block_xy[0], block_xy[1], 0.02))
+    return state_of([zone, b])
+
+
+def test_in_zone_edges_yaw_and_scale():
+    assert P.in_zone(_zone_state(block_xy=(0.559, 0.0)), 2, 1)
+    assert not P.in_zone(_zone_state(block_xy=(0.561, 0.0)), 2, 1)
+    assert P.in_zone(_zone_state(block_xy=(0.5, -0.059)), 2, 1)
+    # along the diagonal: a 45°-rotated zone reaches 0.0849 m along x, an aligned one 0.06 m
+    assert not P.in_zone(_zone_state(yaw=0.0, block_xy=(0.575, 0.0)), 2, 1)
+    assert P.in_zone(_zone_state(yaw=math.pi / 4, block_xy=(0.575, 0.0)), 2, 1)
+    assert not P.in_zone(_zone_state(yaw=math.pi / 4, block_xy=(0.55, 0.05)), 2, 1)
+    assert P.in_zone(_zone_state(scale=2.0, block_xy=(0.61, 0.1)), 2, 1)
+    assert not P.in_zone(_zone_state(scale=2.0, block_xy=(0.63, 0.0)), 2, 1)
+    s = _zone_state(block_xy=(0.58, 0.0))
+    assert P.zone_outside_distance(s, 2, 1) == pytest.approx(0.02)
+    assert P.zone_outside_distance(_zone_state(), 2, 1) == 0.0
+
+
+def test_objects_in_zone_filters_kinds():
+    zone = ObjectSpec(1, "zone", "green", (0.5, 0.0, 0.0005))
+    objs = [zone, block(2, (0.5, 0.0, 0.02)), block(3, (0.7, 0.3, 0.02)),
+            ObjectSpec(4, "ball", "red", (0.52, 0.02, 0.03))]
+    s = state_of(objs)
+    assert P.objects_in_zone(s, 1) == [2]
+    assert P.objects_in_zone(s, 1, kinds=("block", "ball")) == [2, 4]
+
+
+# --------------------------------------------------------------------------------------- bowls
+def test_in_bowl():
+    bowl = ObjectSpec(1, "bowl", "red", (0.5, 0.1, BOWL_HEIGHT / 2))
+    floor = P.bowl_floor_z(bowl.pos)
+    assert floor == pytest.approx(0.004)
+    z = floor + 0.02
+    assert P.in_bowl(state_of([bowl, block(2, (0.5 + 0.049, 0.1, z))]), 2, 1)
+    assert not P.in_bowl(state_of([bowl, block(2, (0.5 + 0.051, 0.1, z))]), 2, 1)
+    assert P.in_bowl(state_of([bowl, block(2, (0.5, 0.1 - 0.03, z))]), 2, 1)
+    # above the rim (e.g. held over the bowl or resting on its wall)
+    assert not P.in_bowl(state_of([bowl, block(2, (0.5, 0.1, BOWL_HEIGHT + 0.001))]), 2, 1)
+
+
+# --------------------------------------------------------------------------------------- stacks
+def _tower(sizes=("small", "small", "small"), x=0.5, y=0.0, offsets=None, dz=None):
+    objs, z, prev_h = [], 0.0, None
+    for k, s in enumerate(sizes):
+        b = block(k + 1, (0, 0, 0), size=s)
+        h = b.height
+        z = h / 2 if prev_h is None else z + (prev_h + h) / 2 + (dz[k] if dz else 0.0)
+        ox, oy = offsets[k] if offsets else (0.0, 0.0)
+        objs.append(b.moved((x + ox, y + oy, z)))
+        prev_h = h
+    return state_of(objs)
+
+
+def test_is_stack_accepts_a_good_tower():
+    s = _tower()
+    assert P.is_stack(s, [1, 2, 3]) == (True, "3 object(s) stacked")
+    assert P.is_stack(s, [1])[0]
+    mixed = _tower(("big", "small", "small"))
+    assert P.is_stack(mixed, [1, 2, 3])[0]
+
+
+def test_is_stack_order_matters():
+    s = _tower()
+    ok, why = P.is_stack(s, [2, 1, 3])
+    assert not ok and "not on the table" in why
+    assert P.find_stack_order(s, [3, 1, 2]) == [1, 2, 3]
+
+
+@pytest.mark.parametrize(
+    "kw,word",
+    [
+        ({"offsets": [(0, 0), (0.0, 0.015), (0.021, 0.0)]}, "off the stack axis"),
+        ({"offsets": [(0, 0), (0.015, 0.0), (0.015, 0.014)]}, "off the stack axis"),
+        ({"dz": [0, 0.016, 0]}, "not resting on"),
+        ({"dz": [0, 0, -0.016]}, "not resting on"),
+    ],
+)
+def test_is_stack_tolerances(kw, word):
+    ok, why = P.is_stack(_tower(**kw), [1, 2, 3])
+    assert not ok and word in why
+
+
+def test_is_stack_within_tolerances():
+    s = _tower(offsets=[(0, 0), (0.014, 0.0), (0.0, 0.019)], dz=[0, 0.014, -0.014])
+    assert P.is_stack(s, [1, 2, 3])[0]
+
+
+def test_is_stack_rejects_tilt_and_floating_bottom():
+    s = _tower()
+    p = dict(s.poses)
+    p[3] = Pose(p[3].pos, tilt_quat(math.radians(30)))
+    assert P.toppled(SceneState(s.objects, p), 3)
+    ok, why = P.is_stack(SceneState(s.objects, p), [1, 2, 3])
+    assert not ok and "tilted" in why
+    p[3] = Pose(p[3].pos, tilt_quat(math.radians(10)))
+    assert not P.toppled(SceneState(s.objects, p), 3)
+    assert P.is_stack(SceneState(s.objects, p), [1, 2, 3])[0]
+    # a cube lying on another face (90°) is upright again
+    p[3] = Pose(p[3].pos, tilt_quat(math.radians(90)))
+    assert P.is_stack(SceneState(s.objects, p), [1, 2, 3])[0]
+    lifted = _tower(dz=None)
+    q = {i: Pose((pp.pos[0], pp.pos[1], pp.pos[2] + 0.02)) for i, pp in lifted.poses.items()}
+    ok, why = P.is_stack(SceneState(lifted.objects, q), [1, 2, 3])
+    assert not ok and "not on the table" in why
+    assert not P.is_stack(s, [])[0]
+
+
+def test_build_tower_finds_tallest_partial_stack():
+    s = _tower(("small",) * 4)
+    assert P.build_tower(s, [1, 2, 3, 4]) == [1, 2, 3, 4]
+    p = dict(s.poses)
+    p[3] = Pose((0.6, 0.2, 0.02))  # pulled out: 4 floats
+    s2 = SceneState(s.objects, p)
+    assert P.build_tower(s2, [1, 2, 3, 4]) == [1, 2]
+    zone = ObjectSpec(9, "zone", "green", (0.5, 0.0, 0.0005))
+    s3 = SceneState(s.objects + (zone,), {**s.poses, 9: Pose(zone.pos)})
+    assert P.build_tower(s3, [1, 2, 3, 4], zone_id=9) == [1, 2, 3, 4]
+    far = SceneState(s.objects + (zone.moved((0.7, 0.3, 0.0005)),), {**s.poses, 9: Pose((0.7, 0.3, 0.0005))})
+    assert P.build_tower(far, [1, 2, 3, 4], zone_id=9) == []
+    assert P.build_tower(s, [1, 2, 3, 4], accept=lambda lvl, i: i != 3) == [1, 2]
+
+
+# --------------------------------------------------------------------------------------- motion
+def test_moved_less_than():
+    s = state_of([block(1, (0.5, 0.0, 0.02))])
+    assert P.moved_less_than(s, 1, (0.5, 0.029, 0.02))
+    assert not P.moved_less_than(s, 1, (0.5, 0.031, 0.02))
+    assert not P.moved_less_than(s, 1, (0.5, 0.02, 0.045))  # 3-D distance
+
+
+# --------------------------------------------------------------------------------------- shapes
+def test_fit_circle():
+    ang = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    pts = np.column_stack([0.5 + 0.1 * np.cos(ang), 0.1 + 0.1 * np.sin(ang), np.full(8, 0.02)])
+    c, r, res = P.fit_circle(pts)
+    assert np.allclose(c, [0.5, 0.1], atol=1e-9) and r == pytest.approx(0.1) and res < 1e-9
+    pts[0, 0] += 0.012
+    _, _, res = P.fit_circle(pts)
+    assert res > 0.005
+    _, r, res = P.fit_circle([(0.4, 0.0), (0.5, 0.1), (0.6, 0.2)])
+    assert math.isinf(r) and math.isinf(res)
+    assert math.isinf(P.fit_circle([(0.4, 0.0), (0.5, 0.1)])[1])
+
+
+def _grid(rows, cols, pitch, yaw=0.0, origin=(0.5, 0.0)):
+    cs, sn = math.cos(yaw), math.sin(yaw)
+    pts = []
+    for i in range(rows):
+        for j in range(cols):
+            u, v = j * pitch, i * pitch
+            pts.append((origin[0] + cs * u - sn * v, origin[1] + sn * u + cs * v))
+    return np.array(pts)
+
+
+@pytest.mark.parametrize("rows,cols", [(3, 3), (2, 2), (2, 3), (1, 4)])
+@pytest.mark.parametrize("yaw", [0.0, 0.3, math.pi / 4, 1.2])
+def test_is_grid_accepts_rotated_grids(rows, cols, yaw):
+    pts = _grid(rows, cols, 0.05, yaw)
+    rng = np.random.default_rng(0)
+    ok, why = P.is_grid(pts[rng.permutation(len(pts))], rows, cols, (0.04, 0.06), 0.015)
+    assert ok, why
+
+
+def test_is_grid_rejections():
+    pts = _grid(3, 3, 0.05, 0.3)
+    assert not P.is_grid(pts, 2, 4)[0]  # wrong count
+    assert not P.is_grid(_grid(3, 3, 0.07), 3, 3, (0.04, 0.06))[0]  # pitch too big
+    bad = pts.copy()
+    bad[4] += (0.02, 0.0)
+    assert not P.is_grid(bad, 3, 3, (0.04, 0.06), 0.015)[0]  # one point out of line
+    ok = pts.copy()
+    ok[4] += (0.005, 0.0)
+    assert P.is_grid(ok, 3, 3, (0.04, 0.06), 0.015)[0]
+
+
+# --------------------------------------------------------------------------------------- reward
+def test_ravens_reward_one_to_one_and_replace():
+    objs = [block(1, (0.5, 0.0, 0.02)), block(2, (0.5, 0.0, 0.06))]
+    s = state_of(objs, {2: (0.5, 0.0, 0.02)})  # both on the first slot
+    t = (Target((0.5, 0.0, 0.02)), Target((0.6, 0.0, 0.02)))
+    g = OracleGoal((1, 2), t, ((1, 1), (1, 1)))
+    assert P.ravens_reward([g], s) == pytest.approx(0.5)
+    g_rep = OracleGoal((1, 2), t, ((1, 1), (1, 1)), replace=True)
+    assert P.ravens_reward([g_rep], s) == pytest.approx(1.0)
+    s_ok = state_of(objs, {2: (0.6, 0.009, 0.02)})
+    assert P.ravens_reward([g], s_ok) == pytest.approx(1.0)
+    s_far = state_of(objs, {2: (0.6, 0.011, 0.02)})
+    assert P.ravens_reward([g], s_far) == pytest.approx(0.5)
+    s_high = state_of(objs, {2: (0.6, 0.0, 0.036)})
+    assert P.ravens_reward([g], s_high) == pytest.approx(0.5)
+    # matching needs augmenting: object 1 could take either slot, object 2 only slot 0
+    s_aug = state_of(objs, {1: (0.5, 0.0, 0.02), 2: (0.5, 0.0, 0.02)})
+    g2 = OracleGoal((1, 2), (Target((0.5, 0.0, 0.02)),) * 2, ((1, 1), (1, 0)))
+    assert P.ravens_reward([g2], s_aug) == pytest.approx(1.0)
+    assert P.ravens_reward([], s) == 0.0
+
+
+def test_ravens_reward_zone_metric_and_rotation():
+    objs = [block(1, (0.55, 0.05, 0.02))]
+    s = state_of(objs)
+    g = OracleGoal((1,), (Target((0.5, 0.0, 0.0)),), ((1,),), metric="zone", zone_size=0.12)
+    assert P.ravens_reward([g], s) == 1.0
+    g_small = OracleGoal((1,), (Target((0.5, 0.0, 0.0)),), ((1,),), metric="zone", zone_size=0.08)
+    assert P.ravens_reward([g_small], s) == 0.0
+    rot = OracleGoal((1,), (Target((0.55, 0.05, 0.02), yaw=0.0),), ((1,),), rotations=True)
+    assert P.ravens_reward([rot], s) == 1.0
+    s_rot = state_of(objs, {1: Pose((0.55, 0.05, 0.02), yaw_quat(math.radians(30)))})
+    assert P.ravens_reward([rot], s_rot) == 0.0
+    s_sym = state_of(objs, {1: Pose((0.55, 0.05, 0.02), yaw_quat(math.radians(95)))})
+    assert P.ravens_reward([rot], s_sym) == 1.0  # cube: 90° symmetry
+
+
+def test_short_label():
+    assert P.short_label(block(3, (0.5, 0, 0.03), size="big", color="red")) == "big red block 3"
+    assert P.short_label(ObjectSpec(1, "zone", "green", (0.5, 0, 0))) == "green zone 1"
