@@ -21,7 +21,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from capmj.sim.objects import ObjectSpec, resting_z
-from capmj.sim.palette import COLOR_NAMES, COOL, WARM
+from capmj.sim.palette import COOL, WARM
 from capmj.tasks.predicates import WORKSPACE_X, WORKSPACE_Y, area_bounds
 from capmj.tasks.protocol import Resample
 
