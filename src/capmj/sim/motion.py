@@ -1,0 +1,189 @@
+"""Arm motion: Cartesian straight-line segments tracked by the Menagerie position servos, and the
+Ravens pick-and-place primitive built from them.
+
+Why this shape:
+- Segments are straight lines of the suction tip with a trapezoidal speed profile, sampled every
+  ``ik_dt`` seconds through :class:`SuctionIK` and linearly interpolated in joint space; the profile is
+  stretched until every joint respects the velocity and acceleration limits.
+- The Menagerie servos are ``kp (ctrl - q) - kv qdot``: without feed-forward they lag a moving
+  reference by ``kv/kp = 0.2 s``.  We send ``q_ref + (kv/kp) qdot_ref`` which cancels that lag.
+- Every budget is in simulation steps, never wall-clock, so results do not depend on the machine.
+- Failures are returned as :class:`PrimitiveResult` values, never raised.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal
+
+import numpy as np
+
+from capmj.sim.ik import SuctionIK
+from capmj.sim.world import World
+
+Status = Literal["ok", "unreachable", "no_grip", "timeout", "held_nothing"]
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    speed: float = 1.2            # m/s, free-space tip speed
+    accel: float = 8.0            # m/s^2
+    approach_speed: float = 0.25  # m/s for the last ``approach_gap`` before contact
+    approach_gap: float = 0.02    # m
+    overshoot: float = 0.03       # m searched beyond the expected contact height
+    clearance: float = 0.06       # m between the lowest carried point and the highest object
+    min_transit_z: float = 0.2    # m, tip height floor for transit
+    joint_speed: float = 3.0      # rad/s (UR5e rating: 3.14)
+    joint_accel: float = 20.0     # rad/s^2
+    ik_dt: float = 0.02           # s between IK samples along a segment
+    grip_dwell_steps: int = 10    # steps held after contact before lifting
+    release_dwell_steps: int = 15
+    settle_steps: int = 750       # max steps to let objects come to rest (1.5 s)
+    settle_tol: float = 0.01      # m/s
+    track_steps: int = 150        # max extra steps to converge at a segment end
+    track_tol: float = 0.002      # m tip error accepted at a segment end
+
+
+@dataclass(frozen=True)
+class PrimitiveResult:
+    """Outcome of one pick-and-place; ``obj_id`` is what was gripped (None if nothing)."""
+
+    ok: bool
+    status: Status
+    obj_id: int | None
+    pick: tuple[float, float, float]
+    place: tuple[float, float, float]
+    final_pos: tuple[float, float, float] | None = None
+    steps: int = 0
+    sim_s: float = 0.0
+    message: str = ""
+
+
+@dataclass
+class _Plan:
+    qs: np.ndarray   # (k, 6) joint samples
+    dt: float        # seconds between samples
+
+
+class Motion:
+    """Motion primitives over one :class:`World`."""
+
+    def __init__(self, world: World, config: MotionConfig | None = None) -> None:
+        self.world = world
+        self.cfg = config or MotionConfig()
+        m = world.model
+        self.ik = SuctionIK(m, world.tip_site, world.arm_qpos, world.arm_dof)
+        gain = m.actuator_gainprm[:6, 0]
+        self._ff = -m.actuator_biasprm[:6, 2] / gain  # kv / kp per joint
+        rot = world.tip_pose()[1]
+        self.tool_yaw = float(np.arctan2(rot[1, 0], rot[0, 0]))
+
+    # ------------------------------------------------------------------ segments
+    def _profile(self, length: float, speed: float, accel: float) -> tuple[float, Callable[[float], float]]:
+        """Trapezoidal profile: total time and s(t) in [0, 1]."""
+        if length < 1e-9:
+            return 0.0, lambda t: 1.0
+        t_acc = speed / accel
+        if accel * t_acc**2 >= length:  # triangular
+            t_acc = float(np.sqrt(length / accel))
+            speed = accel * t_acc
+            total = 2 * t_acc
+        else:
+            total = 2 * t_acc + (length - accel * t_acc**2) / speed
+
+        def s(t: float) -> float:
+            if t <= 0:
+                return 0.0
+            if t >= total:
+                return 1.0
+            if t < t_acc:
+                d = 0.5 * accel * t * t
+            elif t > total - t_acc:
+                r = total - t
+                d = length - 0.5 * accel * r * r
+            else:
+                d = 0.5 * accel * t_acc**2 + speed * (t - t_acc)
+            return min(1.0, d / length)
+
+        return total, s
+
+    def plan_line(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float, speed: float) -> _Plan | None:
+        """Joint samples for a straight tip line (yaw interpolated), or None if unreachable."""
+        cfg = self.cfg
+        length = float(np.linalg.norm(end - start))
+        # Treat wrist rotation as extra path length so pure rotations get time too (0.1 m per rad).
+        eff = max(length, 0.1 * abs(yaw1 - yaw0))
+        scale = 1.0
+        q_prev = self.world.data.ctrl[:6].copy()
+        for _ in range(6):
+            total, s = self._profile(eff, speed / scale, cfg.accel / scale**2)
+            n = max(1, int(np.ceil(total / cfg.ik_dt)))
+            dt = total / n if total > 0 else cfg.ik_dt
+            qs = [q_prev]
+            q = q_prev
+            for k in range(1, n + 1):
+                a = s(k * dt)
+                res = self.ik.solve(start + a * (end - start), yaw0 + a * (yaw1 - yaw0), q)
+                if res.q is None or np.max(np.abs(res.q - q)) > 0.5:
+                    return None  # unreachable, or the IK branch flipped (a wrist singularity)
+                q = res.q
+                qs.append(q)
+            arr = np.array(qs)
+            if len(arr) < 2:
+                return _Plan(arr, dt)
+            vel = np.diff(arr, axis=0) / dt
+            acc = np.diff(vel, axis=0) / dt if len(vel) > 1 else np.zeros((1, 6))
+            ratio = max(np.max(np.abs(vel)) / cfg.joint_speed, np.sqrt(np.max(np.abs(acc)) / cfg.joint_accel), 1.0)
+            if ratio <= 1.0001:
+                return _Plan(arr, dt)
+            scale *= ratio * 1.05
+        return _Plan(arr, dt)
+
+    def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None, max_steps: int = 20000) -> tuple[bool, int]:
+        """Track a plan with velocity feed-forward; returns (stopped_early, steps)."""
+        w = self.world
+        ts = w.model.opt.timestep
+        qs, dt = plan.qs, plan.dt
+        n = len(qs) - 1
+        vel = np.vstack([np.diff(qs, axis=0) / dt, np.zeros((1, 6))]) if n > 0 else np.zeros((1, 6))
+        total_steps = int(round(n * dt / ts))
+        steps = 0
+        for k in range(min(total_steps, max_steps)):
+            t = (k + 1) * ts
+            i = min(int(t / dt), n - 1) if n > 0 else 0
+            a = (t - i * dt) / dt if n > 0 else 0.0
+            q_ref = qs[i] + min(a, 1.0) * (qs[i + 1] - qs[i]) if n > 0 else qs[0]
+            w.data.ctrl[:6] = q_ref + self._ff * vel[i]
+            w.step()
+            steps += 1
+            if stop is not None and stop():
+                w.data.ctrl[:6] = w.arm_q()
+                return True, steps
+        w.data.ctrl[:6] = qs[-1]
+        return False, steps
+
+    def converge(self, target: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[bool, int]:
+        """Hold the last reference until the tip is within ``track_tol`` (bounded in steps)."""
+        steps = 0
+        for _ in range(self.cfg.track_steps):
+            if np.linalg.norm(self.world.tip_pose()[0] - target) < self.cfg.track_tol:
+                break
+            self.world.step()
+            steps += 1
+            if stop is not None and stop():
+                return True, steps
+        return False, steps
+
+    def move_to(self, pos: np.ndarray, yaw: float, speed: float | None = None,
+                stop: Callable[[], bool] | None = None) -> tuple[str, int]:
+        """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps)."""
+        start = self.ik.tip_position(self.world.data.ctrl[:6].copy())
+        plan = self.plan_line(start, np.asarray(pos, float), self.tool_yaw, yaw, speed or self.cfg.speed)
+        if plan is None:
+            return "unreachable", 0
+        self.tool_yaw = yaw
+        stopped, steps = self.execute(plan, stop)
+        if stopped:
+            return "stopped", steps
+        stopped, more = self.converge(np.asarray(pos, float), stop)
+        return ("stopped" if stopped else "ok"), steps + more

@@ -1,0 +1,126 @@
+"""The Ravens pick-and-place primitive with weld suction, as real physics.
+
+Sequence: rise to a transit height that clears every object on the table, move above the pick
+point, descend until the cup touches, grip, lift, transit, descend until the carried object
+touches something, release, retreat, let the objects come to rest.  Nothing is teleported.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from capmj.sim.motion import Motion, MotionConfig, PrimitiveResult
+from capmj.sim.robot import CUP_RADIUS
+from capmj.sim.world import World
+
+_QUARTER = math.pi / 2
+
+
+def _wrap(a: float, period: float) -> float:
+    """``a`` reduced to [-period/2, period/2)."""
+    return (a + period / 2) % period - period / 2
+
+
+class Primitives:
+    """Pick-and-place over one world; keeps the wrist yaw between calls."""
+
+    def __init__(self, world: World, config: MotionConfig | None = None) -> None:
+        self.world = world
+        self.motion = Motion(world, config)
+        self.cfg = self.motion.cfg
+
+    # ------------------------------------------------------------------ geometry
+    def surface_z(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
+        """Height of the highest object top under a disc at ``xy`` (0 for the bare table)."""
+        z = 0.0
+        for i in self.world.by_id:
+            if i == exclude:
+                continue
+            lo, hi = self.world.aabb(i)
+            if lo[0] - radius <= xy[0] <= hi[0] + radius and lo[1] - radius <= xy[1] <= hi[1] + radius:
+                z = max(z, float(hi[2]))
+        return z
+
+    def highest_top(self, exclude: int | None = None) -> float:
+        tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
+        return max(tops, default=0.0)
+
+    # ------------------------------------------------------------------ primitive
+    def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
+        """Pick at ``pick`` (xy; z ignored) and put the gripped object's centre at ``place``.
+
+        ``place`` may be xy (the object then rests on whatever surface is there) or xyz (the
+        object's centre height; the descent still stops at first contact).  ``place_yaw`` is the
+        object's final yaw (blocks are symmetric every 90°), None to keep its orientation.
+        """
+        w, m, cfg = self.world, self.motion, self.cfg
+        steps0, t0 = w.steps, w.time
+        pick = np.asarray(pick, float)
+        place = np.asarray(place, float)
+        pick_t = (float(pick[0]), float(pick[1]), float(pick[2]) if len(pick) > 2 else 0.0)
+        place_t = (float(place[0]), float(place[1]), float(place[2]) if len(place) > 2 else float("nan"))
+
+        def result(status: str, obj: int | None, msg: str = "") -> PrimitiveResult:
+            final = tuple(float(v) for v in w.pose(obj).pos) if obj is not None else None
+            return PrimitiveResult(status == "ok", status, obj, pick_t, place_t, final,  # type: ignore[arg-type]
+                                   w.steps - steps0, w.time - t0, msg)
+
+        if w.suction.held is not None:
+            w.suction.release()
+        transit = max(cfg.min_transit_z, self.highest_top() + cfg.clearance)
+        yaw = self.motion.tool_yaw
+        # 1. up, over, and down onto the pick point
+        tip = w.tip_pose()[0]
+        if tip[2] < transit - 1e-3:
+            if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
+                return result("unreachable", None, "cannot rise to transit height")
+        if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
+            return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
+        surface = self.surface_z(pick[:2])
+        touching = lambda: w.suction.touching() is not None  # noqa: E731
+        status, _ = m.move_to(np.array([pick[0], pick[1], surface + cfg.approach_gap]), yaw, stop=touching)
+        if status == "ok":
+            status, _ = m.move_to(np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw,
+                                  speed=cfg.approach_speed, stop=touching)
+        obj = w.suction.grip()
+        if obj is None:
+            m.move_to(np.array([pick[0], pick[1], transit]), yaw)
+            return result("no_grip", None, "descended to the pick point without touching a movable object")
+        w.step(cfg.grip_dwell_steps)
+
+        # 2. lift high enough that the carried object clears everything, then carry
+        obj_pose = w.pose(obj)
+        tip = w.tip_pose()[0]
+        hang = tip[2] - (obj_pose.pos[2] - w.by_id[obj].half_extents[2])
+        transit = max(cfg.min_transit_z, self.highest_top(exclude=obj) + cfg.clearance + hang)
+        if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
+            return result("unreachable", obj, "cannot lift to transit height")
+        delta = 0.0 if place_yaw is None else _wrap(place_yaw - obj_pose.yaw, _QUARTER)
+        new_yaw = yaw + delta
+        offset = np.asarray(obj_pose.pos) - tip  # object centre relative to the tip
+        c, s = math.cos(delta), math.sin(delta)
+        offset_xy = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+        tip_xy = place[:2] - offset_xy
+        if len(place) > 2:
+            centre_z = float(place[2])
+        else:
+            centre_z = self.surface_z(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
+        tip_z = centre_z - offset[2]
+        if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
+            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach")
+
+        # 3. down until the carried object touches, release, retreat, settle
+        placed = w.suction.held_touches_other
+        status, _ = m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z + cfg.approach_gap]), new_yaw, stop=placed)
+        if status == "ok":
+            m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw,
+                      speed=cfg.approach_speed, stop=placed)
+        w.suction.release()
+        w.step(cfg.release_dwell_steps)
+        tip = w.tip_pose()[0]
+        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + 0.1)]), new_yaw)
+        w.settle(cfg.settle_steps, cfg.settle_tol)
+        self.motion.tool_yaw = _wrap(new_yaw, 2 * math.pi) if abs(new_yaw) > 2 * math.pi else new_yaw
+        return result("ok", obj)

@@ -1,0 +1,168 @@
+"""The live MuJoCo world of one episode: model, data, suction, object poses, reset.
+
+``World`` owns the only ``MjModel``/``MjData`` pair of an episode.  Higher layers read object poses
+through :meth:`World.state` snapshots and act through the motion primitives; the planner never sees
+this class (it gets the API facade in ``capmj.agents``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import mujoco
+import numpy as np
+
+from capmj.sim.objects import ObjectSpec
+from capmj.sim.robot import ARM_JOINTS, HOME_QPOS, SUCTION_CUP_GEOM, SUCTION_TIP_SITE
+from capmj.sim.scene import compile_scene
+from capmj.sim.state import Pose, SceneState
+
+FrameListener = Callable[["World"], None]
+
+
+@dataclass(frozen=True)
+class WorldSnapshot:
+    """Full physics state plus the suction weld data (which lives in the *model*)."""
+
+    physics: np.ndarray
+    eq_data: np.ndarray
+    steps: int
+
+
+class World:
+    """One episode's MuJoCo world built from object specs.
+
+    Deterministic: the same specs give the same model, and MuJoCo's CPU stepping is deterministic,
+    so the world evolves identically on every run and process.
+    """
+
+    def __init__(self, objects: Sequence[ObjectSpec]) -> None:
+        compiled = compile_scene(objects)
+        self.model: mujoco.MjModel = compiled.model
+        self.data: mujoco.MjData = mujoco.MjData(self.model)
+        self.objects: tuple[ObjectSpec, ...] = compiled.objects
+        self.xml = compiled.xml
+        m = self.model
+        self.by_id = {o.obj_id: o for o in self.objects}
+        self.body_of = {o.obj_id: m.body(o.body).id for o in self.objects}
+        self.arm_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in ARM_JOINTS])
+        self.arm_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in ARM_JOINTS])
+        self.tip_site = m.site(SUCTION_TIP_SITE).id
+        self.cup_geom = m.geom(SUCTION_CUP_GEOM).id
+        body_to_obj = {b: i for i, b in self.body_of.items()}
+        self.geom_obj = np.array([body_to_obj.get(int(b), 0) for b in m.geom_bodyid], dtype=int)
+        """Object id of every geom (0 for robot, table and floor)."""
+        self.movable_ids = tuple(o.obj_id for o in self.objects if not o.fixed)
+        self.free_qpos = {i: int(m.jnt_qposadr[m.body_jntadr[self.body_of[i]]]) for i in self.movable_ids}
+        self.free_dof = {i: int(m.jnt_dofadr[m.body_jntadr[self.body_of[i]]]) for i in self.movable_ids}
+        self.weld_of = {i: m.equality(f"suction_{self.by_id[i].body}").id for i in self.movable_ids}
+        self.steps = 0
+        self._listeners: list[tuple[FrameListener, int]] = []
+        self.set_arm(np.array(HOME_QPOS))
+        mujoco.mj_forward(m, self.data)
+        from capmj.sim.suction import Suction
+
+        self.suction = Suction(self)
+
+    # ------------------------------------------------------------------ stepping
+    @property
+    def time(self) -> float:
+        return float(self.data.time)
+
+    def set_arm(self, q: np.ndarray) -> None:
+        """Teleport the arm (initialisation only) and hold it there with the servos."""
+        self.data.qpos[self.arm_qpos] = q
+        self.data.qvel[self.arm_dof] = 0.0
+        self.data.ctrl[:6] = q
+
+    def arm_q(self) -> np.ndarray:
+        return self.data.qpos[self.arm_qpos].copy()
+
+    def step(self, n: int = 1) -> None:
+        """Advance physics ``n`` steps, notifying frame listeners at their own stride."""
+        m, d = self.model, self.data
+        for _ in range(n):
+            mujoco.mj_step(m, d)
+            self.steps += 1
+            for fn, every in self._listeners:
+                if self.steps % every == 0:
+                    fn(self)
+
+    def add_frame_listener(self, fn: FrameListener, every_steps: int = 25) -> None:
+        """Call ``fn(world)`` every ``every_steps`` physics steps (e.g. to log transforms)."""
+        self._listeners.append((fn, max(1, int(every_steps))))
+
+    def max_object_speed(self) -> float:
+        if not self.movable_ids:
+            return 0.0
+        dofs = np.concatenate([np.arange(self.free_dof[i], self.free_dof[i] + 3) for i in self.movable_ids])
+        return float(np.max(np.abs(self.data.qvel[dofs])))
+
+    def settle(self, max_steps: int = 1500, tol: float = 0.005, check_every: int = 10) -> int:
+        """Step until every movable object moves slower than ``tol`` m/s; returns steps used."""
+        used = 0
+        while used < max_steps:
+            self.step(check_every)
+            used += check_every
+            if self.max_object_speed() < tol:
+                break
+        return used
+
+    # ------------------------------------------------------------------ reading
+    def tip_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Suction tip position and rotation matrix."""
+        d = self.data
+        return d.site_xpos[self.tip_site].copy(), d.site_xmat[self.tip_site].reshape(3, 3).copy()
+
+    def pose(self, obj_id: int) -> Pose:
+        b = self.body_of[obj_id]
+        return Pose(tuple(float(v) for v in self.data.xpos[b]), tuple(float(v) for v in self.data.xquat[b]))
+
+    def state(self) -> SceneState:
+        return SceneState(self.objects, {i: self.pose(i) for i in self.by_id}, self.time, self.suction.held)
+
+    def top_z(self, obj_id: int) -> float:
+        """World z of the highest point of an object (its axis-aligned box top)."""
+        return float(self.aabb(obj_id)[1][2])
+
+    def aabb(self, obj_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """World axis-aligned bounding box (min corner, max corner) of an object's geoms."""
+        m, d = self.model, self.data
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for g in np.flatnonzero(self.geom_obj == obj_id):
+            half = m.geom_aabb[g, 3:]
+            centre = d.geom_xpos[g] + d.geom_xmat[g].reshape(3, 3) @ m.geom_aabb[g, :3]
+            ext = np.abs(d.geom_xmat[g].reshape(3, 3)) @ half
+            lo, hi = np.minimum(lo, centre - ext), np.maximum(hi, centre + ext)
+        return lo, hi
+
+    def contacts_of(self, obj_id: int) -> set[int]:
+        """Ids of what touches an object: other object ids, 0 for table/floor/robot, -1 for the cup."""
+        d = self.data
+        geoms = d.contact.geom[: d.ncon]
+        if not len(geoms):
+            return set()
+        owners = self.geom_obj[geoms]
+        out: set[int] = set()
+        for col, other in ((0, 1), (1, 0)):
+            rows = owners[:, col] == obj_id
+            if rows.any():
+                others = geoms[rows, other]
+                out.update(int(self.geom_obj[g]) if g != self.cup_geom else -1 for g in others)
+        return out
+
+    # ------------------------------------------------------------------ reset
+    def snapshot(self) -> WorldSnapshot:
+        spec = mujoco.mjtState.mjSTATE_INTEGRATION
+        buf = np.empty(mujoco.mj_stateSize(self.model, spec))
+        mujoco.mj_getState(self.model, self.data, buf, spec)
+        return WorldSnapshot(buf, self.model.eq_data.copy(), self.steps)
+
+    def restore(self, snap: WorldSnapshot) -> None:
+        """Return to a snapshot exactly (used to reset to the episode's initial state on re-plan)."""
+        mujoco.mj_setState(self.model, self.data, snap.physics, mujoco.mjtState.mjSTATE_INTEGRATION)
+        self.model.eq_data[:] = snap.eq_data
+        self.steps = snap.steps
+        mujoco.mj_forward(self.model, self.data)
+        self.suction.sync()

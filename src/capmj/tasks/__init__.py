@@ -1,0 +1,1 @@
+"""Tasks: the protocol, the entry-point registry, shared predicates and scene spawning."""
