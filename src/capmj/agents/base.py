@@ -1,0 +1,89 @@
+"""What an agent gets during an episode, and what it must provide.
+
+An agent acts through :class:`EpisodeContext` only: it counts primitives against a step budget,
+forwards every primitive to the recorder, and can reset the world to the episode's initial state
+(for re-planning).  Budgets are in primitives and simulation steps, never wall-clock.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from capmj.errors import BudgetExceeded
+from capmj.record import NullRecorder, Recorder
+from capmj.sim.motion import PrimitiveResult
+from capmj.sim.primitives import Primitives
+from capmj.sim.world import World
+from capmj.tasks.protocol import Scene, Task, Verdict
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Per-attempt limits: pick-and-place calls and simulation steps."""
+
+    max_primitives: int = 40
+    max_sim_steps: int = 150_000  # 300 s of simulated time
+
+
+class EpisodeContext:
+    """The live episode as agents see it (the LLM planner sees a narrower facade on top)."""
+
+    def __init__(self, task: Task, seed: int, scene: Scene, world: World, *, budget: Budget | None = None,
+                 recorder: Recorder | None = None) -> None:
+        self.task = task
+        self.seed = seed
+        self.scene = scene
+        self.world = world
+        self.prims = Primitives(world)
+        self.budget = budget or Budget()
+        self.recorder: Recorder = recorder or NullRecorder()
+        self.primitives = 0           # in the current attempt
+        self.total_primitives = 0     # over all attempts
+        self.attempt = 0
+        self._initial = world.snapshot()
+        self._attempt_steps0 = world.steps
+        self.notes: dict[str, Any] = {}
+
+    # ------------------------------------------------------------------ acting
+    def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
+        """One budgeted, recorded pick-and-place.  Raises ``BudgetExceeded`` when out of budget."""
+        if self.primitives >= self.budget.max_primitives:
+            raise BudgetExceeded(f"primitive budget of {self.budget.max_primitives} pick-and-places used up")
+        if self.world.steps - self._attempt_steps0 >= self.budget.max_sim_steps:
+            raise BudgetExceeded(f"simulation budget of {self.budget.max_sim_steps} steps used up")
+        res = self.prims.pick_and_place(np.asarray(pick, float), np.asarray(place, float), place_yaw)
+        self.primitives += 1
+        self.total_primitives += 1
+        info = asdict(res)
+        info["attempt"] = self.attempt
+        self.recorder.primitive(self.total_primitives, self.world.time, info)
+        return res
+
+    def reset(self) -> None:
+        """Restore the episode's initial state (before a re-plan)."""
+        self.world.restore(self._initial)
+        self.attempt += 1
+        self.primitives = 0
+        self._attempt_steps0 = self.world.steps
+
+    # ------------------------------------------------------------------ judging
+    def verdict(self) -> Verdict:
+        """Let objects settle, then judge the final state with the task's predicate."""
+        self.world.settle(max_steps=1000)
+        return self.task.evaluate(self.scene, self.world.state())
+
+
+class Agent(Protocol):
+    """An agent solves one episode by acting on the context; exceptions are recorded, not fatal."""
+
+    name: str
+
+    @property
+    def model(self) -> str | None:
+        """The LLM model string, None for non-LLM agents."""
+
+    def act(self, ctx: EpisodeContext) -> None:
+        ...

@@ -1,0 +1,105 @@
+"""Run one episode: (task, seed, agent) -> :class:`EpisodeResult`.
+
+The runner never raises for an episode's own failure: a task whose scene cannot be generated, a
+world that does not compile, an agent that raises or runs out of budget — each becomes a recorded,
+explained failed result, so a benchmark grid always completes.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from capmj.agents.base import Agent, Budget, EpisodeContext
+from capmj.record import NullRecorder, Recorder
+from capmj.sim.world import World
+from capmj.tasks.predicates import ravens_reward
+from capmj.tasks.protocol import Task, make_scene
+
+FRAME_EVERY_STEPS = 25  # 20 Hz of simulated time in logs
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """Everything a results table needs about one episode (one line of ``episodes.jsonl``)."""
+
+    task: str
+    seed: int
+    agent: str
+    model: str | None
+    success: bool
+    progress: float
+    reward: float
+    primitives: int
+    attempts: int
+    sim_s: float
+    wall_s: float
+    error: str | None
+    goal: str = ""
+    diagnostics: tuple[str, ...] = ()
+    llm: dict[str, Any] = field(default_factory=dict)
+    rrd: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["diagnostics"] = list(self.diagnostics)
+        return d
+
+
+def _error_text(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _attach_frames(world: World, recorder: Recorder) -> None:
+    names = {o.obj_id: o.body for o in world.objects}
+    links = [world.model.body(i).name for i in range(1, world.model.nbody) if world.model.body(i).name not in names.values()]
+    link_ids = [world.model.body(n).id for n in links]
+
+    def emit(w: World) -> None:
+        poses = {names[i]: (tuple(w.data.xpos[w.body_of[i]]), tuple(w.data.xquat[w.body_of[i]])) for i in names}
+        for n, b in zip(links, link_ids):
+            poses[n] = (tuple(w.data.xpos[b]), tuple(w.data.xquat[b]))
+        recorder.frame(w.time, poses)
+
+    emit(world)
+    world.add_frame_listener(emit, FRAME_EVERY_STEPS)
+
+
+def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = None,
+                recorder: Recorder | None = None) -> EpisodeResult:
+    """Generate the scene of (task, seed), let the agent act, judge the settled final state."""
+    rec = recorder or NullRecorder()
+    t0 = time.perf_counter()
+    name = getattr(task, "name", repr(task))
+    model = getattr(agent, "model", None)
+    try:
+        scene = make_scene(task, seed)
+        world = World(scene.objects)
+        world.settle()
+    except Exception as exc:  # noqa: BLE001 - a broken task fails its own episode only
+        rec.text("verdict", f"FAILED before acting: {_error_text(exc)}")
+        return EpisodeResult(name, seed, agent.name, model, False, 0.0, 0.0, 0, 0, 0.0,
+                             time.perf_counter() - t0, _error_text(exc))
+    if not isinstance(rec, NullRecorder):
+        _attach_frames(world, rec)
+    rec.text("goal", scene.goal)
+    ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
+    error = None
+    try:
+        agent.act(ctx)
+    except Exception as exc:  # noqa: BLE001 - recorded as this episode's failure
+        error = _error_text(exc)
+    try:
+        verdict = ctx.verdict()
+        reward = ravens_reward(task.oracle_goals(scene), world.state())
+    except Exception as exc:  # noqa: BLE001
+        error = error or f"evaluation failed: {_error_text(exc)}"
+        success, progress, reward, diags = False, 0.0, 0.0, ()
+    else:
+        success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
+    llm = dict(ctx.notes.get("llm", {}))
+    rec.text("verdict", ("SUCCESS" if success else "FAILURE") + f" (progress {progress:.2f})\n" + "\n".join(diags)
+             + (f"\nerror: {error}" if error else ""))
+    return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
+                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm)
