@@ -40,8 +40,9 @@ SUCTION_BODY = "suction"
 SUCTION_CUP_GEOM = "suction_cup"
 SUCTION_TIP_SITE = "suction_tip"
 CUP_RADIUS = 0.012
-CUP_LENGTH = 0.08
-"""Distance from the flange to the cup tip: long enough that the wrist clears a block beside it."""
+CUP_LENGTH = 0.16
+"""Flange-to-tip length (m): long enough that the wrist links (which sit ~0.1 m above and
+beside the flange) pass over a 6-block tower next to the pick or place point."""
 
 HOME_QPOS: tuple[float, ...] = (-3.1416, -1.9, 1.9, -1.5708, -1.5708, 0.0)
 """Joint-space home: arm folded over the rear of the base, tool down, out of the front camera."""

@@ -1,0 +1,127 @@
+"""Foundation tests on real MuJoCo physics: determinism, suction, placing, towers, bowls."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from capmj.sim.objects import BOWL_HEIGHT, ObjectSpec
+from capmj.sim.primitives import Primitives
+from capmj.sim.world import World
+from capmj.tasks import predicates as P
+
+
+def small(i: int, color: str, x: float, y: float, z: float = 0.02, yaw: float = 0.0) -> ObjectSpec:
+    return ObjectSpec(i, "block", color, (x, y, z), yaw, "small")
+
+
+def test_same_specs_same_model_and_trajectory() -> None:
+    specs = [small(1, "red", 0.5, 0.0, yaw=0.3), small(2, "blue", 0.4, 0.2), ObjectSpec(3, "zone", "green", (0.6, -0.2, 0.0005))]
+    a, b = World(specs), World(specs)
+    assert a.xml == b.xml
+    for w in (a, b):
+        Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array([0.6, -0.2]), 0.7)
+    assert a.steps == b.steps
+    np.testing.assert_array_equal(a.data.qpos, b.data.qpos)
+    # a different scene compiles to a different model
+    assert World(specs[:2]).xml != a.xml
+
+
+def test_snapshot_restore_replays_identically() -> None:
+    w = World([small(1, "red", 0.5, 0.0), small(2, "blue", 0.4, 0.2)])
+    snap = w.snapshot()
+    p = Primitives(w)
+    p.pick_and_place(np.array(w.pose(1).pos), np.array([0.55, -0.2]))
+    first = w.data.qpos.copy()
+    w.restore(snap)
+    assert np.allclose(w.pose(1).pos, (0.5, 0.0, 0.02), atol=1e-3)
+    p2 = Primitives(w)
+    p2.pick_and_place(np.array(w.pose(1).pos), np.array([0.55, -0.2]))
+    np.testing.assert_array_equal(w.data.qpos, first)
+
+
+def test_suction_grips_only_movable_objects_in_contact() -> None:
+    w = World([small(1, "red", 0.5, 0.0), ObjectSpec(2, "bowl", "blue", (0.45, 0.25, BOWL_HEIGHT / 2)),
+               ObjectSpec(3, "ball", "gold", (0.6, -0.25, 0.03))])
+    assert w.suction.grip() is None  # nothing touched at home
+    p = Primitives(w)
+    for fixed in (2, 3):
+        res = p.pick_and_place(np.array(w.pose(fixed).pos), np.array([0.4, -0.1]))
+        assert not res.ok and res.status == "no_grip" and res.obj_id is None
+        assert w.suction.held is None
+    assert np.allclose(w.pose(1).pos, (0.5, 0.0, 0.02), atol=2e-3)  # untouched
+
+
+def test_suction_holds_through_fast_transit() -> None:
+    w = World([small(1, "red", 0.3, -0.35), ObjectSpec(2, "block", "blue", (0.7, 0.35, 0.03), 0.0, "big")])
+    offsets: list[float] = []
+
+    def watch(world: World) -> None:
+        if world.suction.held == 1:
+            offsets.append(float(np.linalg.norm(world.tip_pose()[0] - np.asarray(world.pose(1).pos))))
+
+    w.add_frame_listener(watch, 5)
+    res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array([0.7, 0.35, 0.08]))
+    assert res.ok and res.obj_id == 1
+    assert len(offsets) > 20  # carried for a while across the whole workspace diagonal
+    assert max(offsets) - min(offsets) < 0.003  # no slip while carried fast
+    assert P.is_stack(w.state(), [2, 1])[0]
+
+
+def test_block_placed_on_block_rests_on_it() -> None:
+    w = World([small(1, "red", 0.45, 0.1), small(2, "blue", 0.6, -0.15)])
+    res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array(w.pose(2).pos[:2]))
+    assert res.ok
+    state = w.state()
+    assert P.resting_on(state, 1, 2)
+    assert np.linalg.norm(state.pos(1)[:2] - state.pos(2)[:2]) < 0.005
+    assert state.poses[1].tilt < np.radians(3)
+
+
+def test_tower_of_six_survives_a_pick_and_place_next_to_it() -> None:
+    tower = [small(i + 1, c, 0.5, 0.0, 0.02 + 0.04 * i) for i, c in
+             enumerate(["red", "blue", "green", "yellow", "orange", "purple"])]
+    w = World(tower + [small(7, "pink", 0.5, -0.12), small(8, "cyan", 0.42, 0.09)])
+    w.settle()
+    ids = [1, 2, 3, 4, 5, 6]
+    assert P.is_stack(w.state(), ids)[0]
+    p = Primitives(w)
+    assert p.pick_and_place(np.array(w.pose(7).pos), np.array([0.5, 0.12])).ok  # across the tower
+    assert p.pick_and_place(np.array(w.pose(8).pos), np.array([0.58, -0.08])).ok  # next to it
+    ok, why = P.is_stack(w.state(), ids)
+    assert ok, why
+    assert np.linalg.norm(w.state().pos(6)[:2] - np.array([0.5, 0.0])) < 0.01
+
+
+def test_block_dropped_in_bowl_stays_in_bowl() -> None:
+    w = World([small(1, "red", 0.45, -0.2), ObjectSpec(2, "bowl", "blue", (0.55, 0.15, BOWL_HEIGHT / 2))])
+    p = Primitives(w)
+    m = p.motion
+    pos = np.array(w.pose(1).pos)
+    m.move_to(np.array([pos[0], pos[1], 0.2]), m.tool_yaw)
+    m.move_to(np.array([pos[0], pos[1], 0.0]), m.tool_yaw, speed=0.2, stop=lambda: w.suction.touching() is not None)
+    assert w.suction.grip() == 1
+    # carry it 8 cm above the rim and let go off-centre: it must fall in and stay in
+    m.move_to(np.array([0.57, 0.16, 0.16]), m.tool_yaw)
+    w.suction.release()
+    w.settle(2000)
+    state = w.state()
+    assert P.in_bowl(state, 1, 2), state.pos(1)
+    assert state.pos(1)[2] < BOWL_HEIGHT
+
+
+def test_unreachable_place_is_a_typed_result() -> None:
+    w = World([small(1, "red", 0.5, 0.0)])
+    res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array([1.6, 0.0, 0.1]))
+    assert not res.ok and res.status == "unreachable"
+    assert "out of reach" in res.message
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.6, -1.2])
+def test_place_yaw_is_respected(yaw: float) -> None:
+    w = World([small(1, "red", 0.4, 0.2, yaw=0.3)])
+    res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array([0.6, -0.1]), yaw)
+    assert res.ok
+    d = (w.pose(1).yaw - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
+    assert abs(d) < np.radians(3)
+    assert np.linalg.norm(np.asarray(w.pose(1).pos[:2]) - np.array([0.6, -0.1])) < 0.005
