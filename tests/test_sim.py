@@ -125,3 +125,23 @@ def test_place_yaw_is_respected(yaw: float) -> None:
     d = (w.pose(1).yaw - yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4
     assert abs(d) < np.radians(3)
     assert np.linalg.norm(np.asarray(w.pose(1).pos[:2]) - np.array([0.6, -0.1])) < 0.005
+
+
+_PROCESS_SCRIPT = """
+import hashlib, numpy as np
+from capmj.sim.objects import ObjectSpec
+from capmj.sim.primitives import Primitives
+from capmj.sim.world import World
+w = World([ObjectSpec(1, "block", "red", (0.5, 0.0, 0.02), 0.3, "small"), ObjectSpec(2, "block", "blue", (0.4, 0.2, 0.03), 0.0, "big")])
+Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array(w.pose(2).pos[:2]), 1.0)
+print(hashlib.sha256(w.data.qpos.tobytes()).hexdigest())
+"""
+
+
+def test_world_evolves_identically_across_processes() -> None:
+    import subprocess
+    import sys
+
+    runs = {subprocess.run([sys.executable, "-c", _PROCESS_SCRIPT], capture_output=True, text=True, check=True).stdout
+            for _ in range(2)}
+    assert len(runs) == 1 and len(next(iter(runs)).strip()) == 64
