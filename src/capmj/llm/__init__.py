@@ -1,0 +1,27 @@
+"""LLM access for capmj: a retrying, caching, accounting client over litellm.
+
+Importing this package is cheap: litellm (seconds to import) is loaded on the first real call.
+"""
+
+from capmj.llm.cache import CompletionCache, cache_key
+from capmj.llm.client import (
+    CallRecord,
+    Completion,
+    LLMClient,
+    LLMConfig,
+    Usage,
+    image_part,
+    text_part,
+)
+
+__all__ = [
+    "CallRecord",
+    "Completion",
+    "CompletionCache",
+    "LLMClient",
+    "LLMConfig",
+    "Usage",
+    "cache_key",
+    "image_part",
+    "text_part",
+]

@@ -1,0 +1,129 @@
+"""On-disk cache of LLM completions, keyed by everything that determines the answer.
+
+Why: benchmark runs are repeated (debugging a task, re-scoring, CI) and a temperature-0 answer to
+the same request is worth reusing instead of paying for it again.  The key covers model, api_base,
+the full messages (images included), temperature and max_tokens, but never the API key: rotating a
+key must not invalidate the cache, and secrets must not be derivable from file names.
+
+Layout: ``<root>/<key[:2]>/<key[2:4]>/<key>.json`` (two-level fan-out keeps directories small).
+Files are written atomically (temporary file + ``os.replace``) so a crash or a parallel run never
+leaves a half-written entry; an unreadable or malformed entry is simply a miss and is overwritten.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from capmj.errors import ConfigError
+
+__all__ = ["CACHE_FORMAT", "CompletionCache", "cache_key"]
+
+CACHE_FORMAT = 1
+"""Bumped whenever the stored record layout changes; older entries then read as misses."""
+
+_log = logging.getLogger(__name__)
+
+# Fields every stored record must carry, with their accepted types.
+_FIELDS: dict[str, type | tuple[type, ...]] = {
+    "text": str,
+    "model": str,
+    "prompt_tokens": int,
+    "completion_tokens": int,
+    "cost_usd": (int, float),
+    "latency_s": (int, float),
+}
+
+
+def cache_key(
+    *,
+    model: str,
+    api_base: str | None,
+    messages: Sequence[Mapping[str, Any]],
+    temperature: float,
+    max_tokens: int,
+) -> str:
+    """sha256 hex digest of the canonical JSON of the request's answer-determining fields."""
+    payload = {
+        "format": CACHE_FORMAT,
+        "model": model,
+        "api_base": api_base,
+        "messages": list(messages),
+        "temperature": float(temperature),
+        "max_tokens": int(max_tokens),
+    }
+    try:
+        canonical = json.dumps(
+            payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
+        )
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"LLM messages must be JSON-serialisable to be cached: {exc}") from exc
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def _valid(record: object, key: str) -> bool:
+    if not isinstance(record, dict) or record.get("format") != CACHE_FORMAT:
+        return False
+    if record.get("key") != key:
+        return False
+    for name, kind in _FIELDS.items():
+        value = record.get(name)
+        if isinstance(value, bool) or not isinstance(value, kind):
+            return False
+        if isinstance(value, float) and not math.isfinite(value):
+            return False
+    return True
+
+
+class CompletionCache:
+    """One JSON file per request key under ``root``; safe to share between processes."""
+
+    def __init__(self, root: Path | str) -> None:
+        self.root = Path(root)
+
+    def path_for(self, key: str) -> Path:
+        if len(key) < 8 or not all(c in "0123456789abcdef" for c in key):
+            raise ValueError(f"not a cache key: {key!r}")
+        return self.root / key[:2] / key[2:4] / f"{key}.json"
+
+    def get(self, key: str) -> dict[str, Any] | None:
+        """The stored record, or None on a miss (absent, unreadable, corrupt, other format)."""
+        path = self.path_for(key)
+        try:
+            record = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            _log.warning("ignoring unreadable LLM cache entry %s: %s", path, exc)
+            return None
+        if not _valid(record, key):
+            _log.warning("ignoring malformed LLM cache entry %s", path)
+            return None
+        return record
+
+    def put(self, key: str, record: Mapping[str, Any]) -> Path:
+        """Store ``record`` (plus key and format) atomically; returns the entry's path."""
+        path = self.path_for(key)
+        data = {**record, "key": key, "format": CACHE_FORMAT}
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{key[:8]}.", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                json.dump(data, handle, ensure_ascii=False, indent=1, allow_nan=False)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+        return path
