@@ -1,0 +1,14 @@
+"""Benchmark grids: ``python -m capmj.bench`` (see :mod:`capmj.bench.cli` and docs/bench.md).
+
+Importing this package imports neither rerun nor litellm nor MuJoCo; workers import what they need.
+"""
+
+from capmj.bench.cli import main, parse_seeds
+from capmj.bench.grid import AgentSpec, Grid, Job, run_jobs_to_file
+from capmj.bench.report import markdown, plot, report, write_summary
+from capmj.bench.results import ResultsWriter, read_results, stats, summarize, wilson
+
+__all__ = [
+    "AgentSpec", "Grid", "Job", "ResultsWriter", "main", "markdown", "parse_seeds", "plot", "read_results",
+    "report", "run_jobs_to_file", "stats", "summarize", "wilson", "write_summary",
+]

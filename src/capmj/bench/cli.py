@@ -1,0 +1,365 @@
+"""``python -m capmj.bench``: run task × seed grids for one agent configuration, and report.
+
+Exit codes: 0 the grid ran (whatever the success rate), 2 bad input (unknown task/tag/agent, bad
+seed range, unwritable output folder, ...) with a one-line error, 130 interrupted (Ctrl-C; finished
+episodes are kept and ``--resume`` continues).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Sequence
+
+from capmj.errors import CapmjError, ConfigError
+
+TEST_SEEDS = "10001:10101:2"
+"""The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
+DEFAULT_TASKS = "benchmark"
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature")
+
+EPILOG = """\
+examples:
+  python -m capmj.bench                                   # oracle, all benchmark tasks, 50 test seeds
+  python -m capmj.bench --tasks stack-all-blocks-on-a-zone,put-block-into-matching-bowl --seeds 10001:10007:2
+  python -m capmj.bench --tasks all --seeds 1,3,5 --workers 2 --out runs/smoke
+  python -m capmj.bench --out runs/smoke --resume         # run what a killed run did not finish
+  python -m capmj.bench --agent llm --model gpt-4o-mini --reporter vlm --log-images   (see docs/llm.md)
+  python -m capmj.bench --list                            # tasks, their plugins, tags, broken plugins
+  python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table
+
+results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
+         DIR/rrd/<task>/<seed>-<agent>.rrd (open with: python -m capmj.replay FILE --open)
+"""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage + error)
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m capmj.bench", description="Run a grid of capmj episodes (tasks × seeds) "
+                "with one agent, write episodes.jsonl and summary tables.", epilog=EPILOG,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--tasks", default=None, metavar="SEL",
+                   help=f"comma-separated task names, tags (benchmark, generated, ...) or 'all' (default: {DEFAULT_TASKS})")
+    p.add_argument("--seeds", default=None, metavar="SEEDS",
+                   help=f"seeds as a list '1,3,5' and/or ranges 'start:stop[:step]' (stop excluded); "
+                        f"default: the test split {TEST_SEEDS} (50 odd seeds from 10001)")
+    p.add_argument("--agent", default=None, help="agent: oracle (default), reference, llm")
+    g = p.add_argument_group("LLM agent options (passed to the agent; see docs/llm.md)")
+    g.add_argument("--model", default=None, help="LLM model, e.g. gpt-4o-mini")
+    g.add_argument("--api-base", dest="api_base", default=None, help="OpenAI-compatible API base URL")
+    g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
+    g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
+    g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
+    p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the run in --out: run only the episodes missing from its episodes.jsonl "
+                        "(tasks/seeds/agent default to the stored config.json)")
+    logs = p.add_mutually_exclusive_group()
+    logs.add_argument("--no-log", action="store_true", help="do not write .rrd episode logs")
+    logs.add_argument("--log-images", action="store_true", help="also log camera RGB + depth at every primitive")
+    p.add_argument("--list", action="store_true", help="list tasks (plugin, version, tags) and broken plugins")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def build_report_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m capmj.bench report",
+                description="Rebuild summary tables from one or several result folders (one column per "
+                            "(agent, model) configuration of each folder).",
+                epilog="examples:\n  python -m capmj.bench report runs/a               # rewrites runs/a/summary.*\n"
+                       "  python -m capmj.bench report runs/a runs/b --out runs/a-vs-b",
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dirs", nargs="+", type=Path, metavar="DIR")
+    p.add_argument("--out", type=Path, default=None, metavar="DIR",
+                   help="write summary.json/md/png here (default: into DIR when there is one DIR, else print only)")
+    p.add_argument("--json", action="store_true", help="print summary JSON instead of Markdown")
+    return p
+
+
+# ---------------------------------------------------------------------- parsing helpers
+def parse_seeds(text: str) -> list[int]:
+    """``"1,3,5"``, ``"10001:10101:2"`` or a mix ``"1,10:20"``; order kept, repeats dropped."""
+    out: list[int] = []
+    parts = [p.strip() for p in str(text).split(",")]
+    if not any(parts):
+        raise ConfigError(f"empty seed list {text!r}; give e.g. 1,3,5 or {TEST_SEEDS}")
+    for part in parts:
+        if not part:
+            raise ConfigError(f"bad seed list {text!r}: empty item; give e.g. 1,3,5 or {TEST_SEEDS}")
+        if ":" in part:
+            bits = part.split(":")
+            if len(bits) not in (2, 3):
+                raise ConfigError(f"bad seed range {part!r}: use start:stop[:step], e.g. {TEST_SEEDS}")
+            try:
+                start, stop = int(bits[0]), int(bits[1])
+                step = int(bits[2]) if len(bits) == 3 else 1
+            except ValueError:
+                raise ConfigError(f"bad seed range {part!r}: start, stop and step must be integers, e.g. {TEST_SEEDS}") from None
+            if step <= 0:
+                raise ConfigError(f"bad seed range {part!r}: step must be positive")
+            if start >= stop:
+                raise ConfigError(f"bad seed range {part!r}: it is empty (stop is excluded and must exceed start)")
+            if start < 0:
+                raise ConfigError(f"bad seed range {part!r}: seeds must be >= 0")
+            vals = range(start, stop, step)
+        else:
+            try:
+                vals = [int(part)]
+            except ValueError:
+                raise ConfigError(f"bad seed {part!r}: seeds are integers; give e.g. 1,3,5 or {TEST_SEEDS}") from None
+            if vals[0] < 0:
+                raise ConfigError(f"bad seed {part!r}: seeds must be >= 0")
+        for v in vals:
+            if v not in out:
+                out.append(v)
+    return out
+
+
+def _one_line(msg: str) -> str:
+    return " ".join(str(msg).split())
+
+
+def _versions() -> dict[str, str]:
+    out = {"python": platform.python_version(), "platform": platform.platform()}
+    for dist in ("capmj", "mujoco", "rerun-sdk", "numpy", "dm-control"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def _prepare_out(path: Path) -> Path:
+    """Create the result folder and prove it is writable; ``ConfigError`` otherwise."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / f".write-probe-{os.getpid()}"
+        with open(probe, "w") as f:
+            f.write("ok")
+        probe.unlink()
+    except OSError as exc:
+        raise ConfigError(f"output folder {str(path)!r} is not writable: {exc.strerror or exc}") from None
+    return path
+
+
+def _list_tasks() -> int:
+    from capmj.tasks import registry
+
+    infos = registry.list_tasks()
+    bad = registry.broken(load=True)
+    rows = []
+    for info in infos:
+        if info.name in bad:
+            continue
+        try:
+            tags = ",".join(sorted(registry.tags_of(info.name))) or "-"
+        except CapmjError:
+            continue
+        rows.append((info.name, f"{info.distribution} {info.version}".strip(), tags))
+    w0 = max([len(r[0]) for r in rows] + [4])
+    w1 = max([len(r[1]) for r in rows] + [6])
+    print(f"tasks ({len(rows)}):")
+    print(f"  {'name':<{w0}}  {'plugin':<{w1}}  tags")
+    for name, dist, tags in rows:
+        print(f"  {name:<{w0}}  {dist:<{w1}}  {tags}")
+    if registry.plugins_disabled():
+        print(f"(entry-point plugins are disabled by {registry.DISABLE_ENV})")
+    if bad:
+        print(f"broken plugins ({len(bad)}):")
+        for name, err in bad.items():
+            print(f"  {name}: {type(err).__name__}: {_one_line(str(err))}")
+    else:
+        print("broken plugins: none")
+    return 0
+
+
+# ---------------------------------------------------------------------- grid command
+def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
+    """Task names of a selector, each checked to load; plus the hand-registered task objects."""
+    from capmj.tasks import registry
+
+    names = registry.resolve(selector)
+    registered = []
+    infos = {i.name: i for i in registry.list_tasks()}
+    for n in names:
+        try:
+            task = registry.get_task(n)
+        except CapmjError as exc:
+            raise ConfigError(f"task {n!r} is unusable: {_one_line(str(exc))}") from None
+        if n in infos and infos[n].distribution == registry.REGISTERED:
+            registered.append(task)
+    if not names:
+        raise ConfigError(f"task selection {selector!r} matches no usable task")
+    return names, registered
+
+
+def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
+    from capmj.agents.factory import make_agent
+    from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
+    from capmj.bench.report import pct_cell, write_summary
+    from capmj.bench.results import (
+        CONFIG,
+        EPISODES,
+        ResultsWriter,
+        episode_key,
+        load_json,
+        read_results,
+        summarize,
+        write_json_atomic,
+    )
+
+    # ---- the result folder and what an earlier run left there
+    if args.out is None:
+        if args.resume:
+            raise ConfigError("--resume needs --out DIR (the folder of the run to continue)")
+        args.out = Path("runs") / time.strftime("%Y%m%d-%H%M%S")
+    out: Path = args.out
+    stored = load_json(out / CONFIG) if args.resume else None
+    if args.resume and not (out / EPISODES).exists() and stored is None:
+        raise ConfigError(f"--resume: {str(out)!r} holds no run to continue (no {EPISODES} or {CONFIG})")
+    if not args.resume and (out / EPISODES).exists() and (out / EPISODES).stat().st_size > 0:
+        raise ConfigError(f"{str(out)!r} already holds results; add --resume to continue that run or choose another --out")
+    prev_args = (stored or {}).get("args") or {}
+    tasks_sel = args.tasks or prev_args.get("tasks") or DEFAULT_TASKS
+    seeds_sel = args.seeds or prev_args.get("seeds") or TEST_SEEDS
+    agent_name = args.agent or prev_args.get("agent") or "oracle"
+    options = {k: getattr(args, k) for k in LLM_OPTIONS}
+    if args.resume and not any(v is not None for v in options.values()) and args.agent is None:
+        options.update({k: v for k, v in (prev_args.get("agent_options") or {}).items() if k in LLM_OPTIONS})
+    options = {k: v for k, v in options.items() if v is not None}
+    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
+    if workers < 0:
+        raise ConfigError(f"--workers must be >= 0, got {workers}")
+    if args.attempts is not None and args.attempts < 1:
+        raise ConfigError(f"--attempts must be >= 1, got {args.attempts}")
+    log, images = not args.no_log, bool(args.log_images)
+    if args.resume and not (args.no_log or args.log_images) and prev_args:
+        log, images = bool(prev_args.get("log", True)), bool(prev_args.get("log_images", False))
+
+    # ---- validate everything before touching the folder
+    seeds = parse_seeds(seeds_sel)
+    tasks, registered = _resolve_tasks(tasks_sel)
+    agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
+    agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
+    _prepare_out(out)
+
+    config = {
+        "schema": "capmj.bench-config/1",
+        "argv": list(argv),
+        "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
+                 "workers": workers, "log": log, "log_images": images},
+        "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
+        "versions": _versions(),
+        "started_at": (stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "resumed_at": list((stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
+                                                                      if args.resume else []),
+    }
+    write_json_atomic(out / CONFIG, config)
+
+    # ---- the episodes still to run
+    existing, bad = read_results(out / EPISODES)
+    done = {episode_key(r) for r in existing}
+    jobs = []
+    for t in tasks:
+        for s in seeds:
+            if (t, s, agent_label, model) in done:
+                continue
+            rrd = str((out / rrd_relpath(t, s, agent_label, model)).resolve()) if log else None
+            jobs.append(Job(t, s, rrd))
+    total = len(tasks) * len(seeds)
+    print(f"capmj-bench: {len(tasks)} task(s) × {len(seeds)} seed(s) = {total} episode(s) with agent {agent_label}"
+          + (f" ({model})" if model else "") + f"; {total - len(jobs)} already done, {len(jobs)} to run on "
+          f"{workers} worker(s); results in {out}" + (f" (skipped {bad} truncated line(s))" if bad else ""),
+          file=sys.stderr)
+
+    bar = None
+    if not args.no_progress and jobs:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(jobs), file=sys.stderr, unit="ep", dynamic_ncols=True, mininterval=0.5,
+                   desc="episodes")
+    counts = {"n": 0, "ok": 0}
+
+    def progress(rec: dict[str, Any]) -> None:
+        counts["n"] += 1
+        counts["ok"] += bool(rec.get("success"))
+        if bar is not None:
+            bar.set_postfix_str(f"success {100 * counts['ok'] / counts['n']:.0f}% ({counts['ok']}/{counts['n']})",
+                                refresh=False)
+            bar.update(1)
+
+    interrupted = False
+    t0 = time.perf_counter()
+    with ResultsWriter(out / EPISODES) as writer:
+        try:
+            stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
+                                     writer=writer, progress=progress, registered=registered)
+        except KeyboardInterrupt:
+            interrupted = True
+            stats = None
+        finally:
+            if bar is not None:
+                bar.close()
+    elapsed = time.perf_counter() - t0
+
+    records, _ = read_results(out / EPISODES)
+    summary = summarize(records)
+    summary["run"] = {"elapsed_s": elapsed, "episodes_run": counts["n"], "workers": workers,
+                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0)}
+    write_summary(out, summary, title=f"capmj benchmark results ({out.name})")
+    for label, st in summary["overall"].items():
+        print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
+              f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")
+    print(f"ran {counts['n']} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
+    if interrupted:
+        print(f"capmj-bench: interrupted; continue with: python -m capmj.bench --out {out} --resume", file=sys.stderr)
+        return 130
+    return 0
+
+
+def report_main(argv: Sequence[str]) -> int:
+    from capmj.bench.report import report
+
+    args = build_report_parser().parse_args(list(argv))
+    out = args.out if args.out is not None else (args.dirs[0] if len(args.dirs) == 1 else None)
+    try:
+        if out is not None:
+            _prepare_out(out)
+        summary, md = report(args.dirs, out)
+    except ConfigError as exc:
+        print(f"capmj-bench report: error: {_one_line(str(exc))}", file=sys.stderr)
+        return 2
+    print(json.dumps(summary, indent=2, sort_keys=True) if args.json else md, end="" if not args.json else "\n")
+    if out is not None:
+        print(f"wrote {Path(out) / 'summary.md'}, summary.json, summary.png", file=sys.stderr)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == "report":
+        return report_main(argv[1:])
+    args = build_parser().parse_args(argv)
+    try:
+        if args.list:
+            return _list_tasks()
+        return run(args, argv)
+    except ConfigError as exc:
+        print(f"capmj-bench: error: {_one_line(str(exc))}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

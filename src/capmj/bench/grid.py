@@ -1,0 +1,295 @@
+"""Run a grid of episodes (task × seed for one agent configuration) in worker processes.
+
+Design:
+
+* Workers are a :class:`concurrent.futures.ProcessPoolExecutor` on the ``spawn`` context (MuJoCo
+  and EGL do not survive ``fork`` after GL initialisation).  Each worker builds its agent once, in
+  the pool initializer, and looks tasks up in the registry (cached per process).
+* Only the parent writes results: each finished episode becomes one complete line appended to
+  ``episodes.jsonl`` with ``fsync`` (:class:`~capmj.bench.results.ResultsWriter`), so a killed run
+  loses at most the episodes in flight, and ``--resume`` runs exactly the missing ones.
+* A worker that dies (segfault, OOM kill...) breaks the pool: the pool is restarted and every
+  episode that was in flight is re-run *alone*; an episode that kills its worker again while alone
+  is recorded as failed with a ``WorkerCrash`` error naming the exit code, the others get their
+  normal result.  So a crash costs one episode, never the run.
+* Physics is deterministic and every episode is a pure function of (task, seed, agent), so the
+  number of workers changes wall time only: ``--workers 2`` gives the same per-episode results as
+  ``--workers 1``.  ``workers=0`` runs in the calling process (debugging; no crash isolation).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import pickle
+import signal
+import time
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+from capmj.bench.results import ResultsWriter, episode_key, sanitize
+
+MP_CONTEXT = "spawn"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One episode to run: ``rrd`` is the absolute log path, or None for no log."""
+
+    task: str
+    seed: int
+    rrd: str | None = None
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """How workers build the agent: factory name and options (``None`` options are dropped)."""
+
+    name: str
+    options: Mapping[str, Any] = field(default_factory=dict)
+    images: bool = False
+
+
+def rrd_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
+    """``rrd/<task>/<seed>-<agent>[-<model>].rrd`` relative to the run folder."""
+    tail = f"{seed}-{agent}" + (f"-{_safe(model)}" if model else "")
+    return f"rrd/{_safe(task)}/{tail}.rrd"
+
+
+def _safe(s: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in str(s))
+
+
+def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, **extra: Any) -> dict[str, Any]:
+    """A result line for an episode that produced no result of its own (worker crash, bad task)."""
+    from capmj.runner import EpisodeResult
+
+    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error).to_dict()
+    rec.update(extra)
+    return rec
+
+
+# ---------------------------------------------------------------------- worker side
+_WORKER: dict[str, Any] = {}
+
+
+def init_worker(spec: AgentSpec, registered: bytes | None = None) -> None:
+    """Pool initializer: build the agent once; add tasks registered by hand in the parent."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+    except ValueError:  # not the main thread (in-process mode from a thread)
+        pass
+    _WORKER.clear()
+    _WORKER["spec"] = spec
+    try:
+        if registered:
+            from capmj.tasks import registry
+
+            for task in pickle.loads(registered):
+                registry.register(task, replace=True)
+        from capmj.agents.factory import make_agent
+
+        _WORKER["agent"] = make_agent(spec.name, **dict(spec.options))
+    except Exception as exc:  # noqa: BLE001 - reported per episode instead of breaking the pool
+        _WORKER["init_error"] = f"{type(exc).__name__}: {exc}"
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Run one episode in this worker; always returns a result record (never raises for the episode)."""
+    spec: AgentSpec = _WORKER["spec"]
+    agent = _WORKER.get("agent")
+    model = getattr(agent, "model", None) if agent is not None else spec.options.get("model")
+    name = getattr(agent, "name", spec.name) if agent is not None else spec.name
+    if agent is None:
+        return failed_record(job.task, job.seed, name, model, _WORKER.get("init_error", "agent not built"))
+    try:
+        from capmj.tasks.registry import get_task
+
+        task = get_task(job.task)
+    except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
+        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+    from capmj.log import record_episode
+
+    try:
+        result = record_episode(task, job.seed, agent, job.rrd, images=spec.images)
+    except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
+        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+    return sanitize(result.to_dict())
+
+
+# ---------------------------------------------------------------------- parent side
+@dataclass
+class GridStats:
+    done: int = 0
+    successes: int = 0
+    crashes: int = 0
+    retried: int = 0
+    episode_wall_s: float = 0.0   # sum of the episodes' own wall times
+    wall_s: float = 0.0           # elapsed time of the whole grid
+
+
+class Grid:
+    """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process)."""
+
+    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
+                 registered: Sequence[Any] = ()) -> None:
+        self.agent = agent
+        self.workers = max(0, int(workers))
+        self.on_result = on_result
+        self.registered = pickle.dumps(list(registered)) if registered else None
+        self.stats = GridStats()
+        self._pool: ProcessPoolExecutor | None = None
+
+    # .................................................................. pool management
+    def _new_pool(self) -> ProcessPoolExecutor:
+        ctx = multiprocessing.get_context(MP_CONTEXT)
+        return ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=init_worker,
+                                   initargs=(self.agent, self.registered))
+
+    def _exit_codes(self) -> list[int]:
+        procs = getattr(self._pool, "_processes", None) or {}
+        codes = []
+        for p in list(procs.values()):
+            try:
+                code = p.exitcode
+            except Exception:  # noqa: BLE001
+                code = None
+            if code not in (None, 0):
+                codes.append(code)
+        return codes
+
+    def _kill_pool(self) -> None:
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        for p in procs:
+            try:
+                if p.is_alive():
+                    p.kill()
+            except Exception:  # noqa: BLE001
+                pass
+        pool.shutdown(wait=True, cancel_futures=True)
+
+    def _emit(self, job: Job, rec: dict[str, Any]) -> None:
+        self.stats.done += 1
+        self.stats.successes += bool(rec.get("success"))
+        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
+        self.on_result(job, rec)
+
+    # .................................................................. running
+    def run(self, jobs: Iterable[Job]) -> GridStats:
+        jobs = list(jobs)
+        if not jobs:
+            return self.stats
+        if self.workers == 0:
+            init_worker(self.agent, self.registered)
+            for job in jobs:
+                self._emit(job, run_job(job))
+            return self.stats
+        try:
+            self._run_pool(deque(jobs))
+        finally:
+            self._kill_pool()
+        return self.stats
+
+    def _run_pool(self, pending: deque[Job]) -> None:
+        suspects: deque[Job] = deque()   # were in flight when a worker died: re-run one at a time
+        inflight: dict[Future, Job] = {}
+        limit = self.workers + 2
+        while pending or suspects or inflight:
+            if self._pool is None:
+                self._pool = self._new_pool()
+            broken = False
+            if not inflight:
+                self._isolating = bool(suspects)
+            source = suspects if self._isolating else pending
+            cap = 1 if self._isolating else limit
+            while source and len(inflight) < cap:
+                job = source.popleft()
+                try:
+                    inflight[self._pool.submit(run_job, job)] = job
+                except BrokenProcessPool:
+                    source.appendleft(job)
+                    broken = True
+                    break
+            if inflight and not broken:
+                done, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
+                for fut in done:
+                    job = inflight[fut]
+                    try:
+                        rec = fut.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        continue
+                    except Exception as exc:  # noqa: BLE001 - e.g. a result that failed to unpickle
+                        rec = failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"),
+                                            f"WorkerError: {type(exc).__name__}: {exc}")
+                    del inflight[fut]
+                    self._emit(job, rec)
+            if broken:
+                crashed = list(inflight.values())
+                inflight.clear()
+                codes = self._exit_codes()
+                self._kill_pool()
+                if self._isolating and len(crashed) == 1:
+                    job = crashed[0]
+                    self.stats.crashes += 1
+                    how = _describe_codes(codes)
+                    self._emit(job, failed_record(
+                        job.task, job.seed, self.agent.name, self.agent.options.get("model"),
+                        f"WorkerCrash: the worker process died while running this episode{how}; "
+                        "it was re-run alone and died again", rrd=None))
+                else:
+                    self.stats.retried += len(crashed)
+                    suspects.extend(crashed)
+                self._isolating = bool(suspects)
+
+    _isolating = False
+
+
+def _describe_codes(codes: Sequence[int]) -> str:
+    if not codes:
+        return ""
+    parts = []
+    for c in codes:
+        if c < 0:
+            try:
+                parts.append(f"killed by {signal.Signals(-c).name}")
+            except ValueError:
+                parts.append(f"signal {-c}")
+        else:
+            parts.append(f"exit code {c}")
+    return " (" + ", ".join(parts) + ")"
+
+
+def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
+                     writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
+                     registered: Sequence[Any] = ()) -> GridStats:
+    """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``)."""
+    out_dir = Path(out_dir).resolve()
+
+    def on_result(job: Job, rec: dict[str, Any]) -> None:
+        rrd = rec.get("rrd")
+        if rrd:
+            try:
+                rec["rrd"] = os.path.relpath(rrd, out_dir)
+            except ValueError:
+                pass
+        writer.write(rec)
+        if progress is not None:
+            progress(rec)
+
+    grid = Grid(agent, workers=workers, on_result=on_result, registered=registered)
+    t0 = time.perf_counter()
+    stats = grid.run(jobs)
+    stats.wall_s = time.perf_counter() - t0
+    return stats
+
+
+__all__ = ["AgentSpec", "Grid", "GridStats", "Job", "MP_CONTEXT", "episode_key", "failed_record", "init_worker",
+           "rrd_relpath", "run_job", "run_jobs_to_file"]

@@ -1,0 +1,221 @@
+"""Summary tables and plots of benchmark results, for one run folder or several side by side.
+
+``summary.md`` is shaped like the CapRavens thesis's Table 5.2: tasks as rows, one column per
+configuration (agent, model — plus the LLM options that differ, when several folders are
+compared), cells ``"96 % [87–99]"`` = success rate and its 95 % Wilson interval.  ``summary.png``
+draws the same numbers as bars with the intervals as error bars (matplotlib, Agg backend).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from capmj.bench.results import (
+    CONFIG,
+    EPISODES,
+    SUMMARY_JSON,
+    SUMMARY_MD,
+    SUMMARY_PNG,
+    config_of,
+    default_label,
+    load_json,
+    read_results,
+    summarize,
+    write_json_atomic,
+)
+from capmj.errors import ConfigError
+
+TASK_LETTERS: dict[str, str] = {
+    "stack-all-blocks-on-a-zone": "A",
+    "stack-blocks-of-same-size": "B",
+    "stack-blocks-of-same-color": "C",
+    "stack-blocks-by-color-and-size": "D",
+    "stack-blocks-by-relative-position-and-color": "E",
+    "move-blocks-between-absolute-positions": "F",
+    "move-blocks-between-absolute-positions-by-size": "G",
+    "put-block-into-matching-bowl": "H",
+    "put-block-into-mismatching-bowl": "I",
+    "stack-blocks-with-alternate-color": "J",
+}
+"""The thesis's letters of the benchmark tasks (Table 5.1), shown in front of the names."""
+
+LABEL_OPTIONS = ("reporter", "attempts", "temperature")
+"""Agent options that distinguish configurations in column labels (besides agent and model)."""
+
+
+def _order(task: str) -> tuple[int, str]:
+    letter = TASK_LETTERS.get(task)
+    return (0, letter) if letter else (1, task)
+
+
+def task_label(task: str) -> str:
+    letter = TASK_LETTERS.get(task)
+    return f"{letter} {task}" if letter else task
+
+
+def pct_cell(st: Mapping[str, Any] | None, show_n: bool = False) -> str:
+    """``"96 % [87–99]"`` (success rate and 95 % Wilson interval, rounded to whole percent)."""
+    if not st or not st.get("n"):
+        return "—"
+    lo, hi = st["ci95"]
+    cell = f"{round(100 * st['success_rate'])} % [{round(100 * lo)}–{round(100 * hi)}]"
+    return cell + (f" (n={st['n']})" if show_n else "")
+
+
+def _fmt(v: Any, nd: int = 2) -> str:
+    return "—" if v is None else f"{v:.{nd}f}"
+
+
+def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
+             sources: Sequence[str] = ()) -> str:
+    """The Markdown report: the Table-5.2-shaped success table, then per-cell details."""
+    labels = list(summary["overall"])
+    tasks = sorted(summary["tasks"], key=_order)
+    ns = {lab: {summary["tasks"][t][lab]["n"] for t in tasks if lab in summary["tasks"][t]} for lab in labels}
+    uniform = {lab: len(v) == 1 for lab, v in ns.items()}
+    head = [f"{lab} (n={next(iter(ns[lab]))})" if uniform[lab] and ns[lab] else lab for lab in labels]
+    out = [f"# {title}", ""]
+    if sources:
+        out += ["Sources: " + ", ".join(f"`{s}`" for s in sources), ""]
+    out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", "",
+            "| Task | " + " | ".join(head) + " |",
+            "|---|" + "---:|" * len(labels)]
+    for t in tasks:
+        cells = [pct_cell(summary["tasks"][t].get(lab), show_n=not uniform[lab]) for lab in labels]
+        out.append(f"| {task_label(t)} | " + " | ".join(cells) + " |")
+    out.append("| **Overall** | " + " | ".join(f"**{pct_cell(summary['overall'][lab])}**" for lab in labels) + " |")
+    out += ["", "## Details", "",
+            "| Task | Configuration | n | successes | success | 95 % CI | mean progress | mean primitives "
+            "| errors | wall total (s) | wall mean (s) |",
+            "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
+    rows = [(t, summary["tasks"][t]) for t in tasks] + [("**Overall**", summary["overall"])]
+    for t, per in rows:
+        for lab in labels:
+            st = per.get(lab)
+            if not st:
+                continue
+            lo, hi = st["ci95"]
+            name = t if t.startswith("**") else task_label(t)
+            out.append(f"| {name} | {lab} | {st['n']} | {st['successes']} | {100 * (st['success_rate'] or 0):.1f} % | "
+                       f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
+                       f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
+    return "\n".join(out) + "\n"
+
+
+def plot(summary: Mapping[str, Any], path: str | Path, title: str = "capmj benchmark") -> Path:
+    """Grouped horizontal bars of the success rate per task and configuration, Wilson error bars."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    labels = list(summary["overall"])
+    tasks = sorted(summary["tasks"], key=_order)
+    rows = [(task_label(t), summary["tasks"][t]) for t in tasks] + [("Overall", summary["overall"])]
+    k = max(1, len(labels))
+    height = 0.8 / k
+    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.45 * len(rows) * max(1, k * 0.6)))
+    y0 = np.arange(len(rows))[::-1]
+    for j, lab in enumerate(labels):
+        ys, vals, err = [], [], [[], []]
+        for (name, per), y in zip(rows, y0):
+            st = per.get(lab)
+            if not st or not st["n"]:
+                continue
+            rate = 100 * st["success_rate"]
+            lo, hi = (100 * v for v in st["ci95"])
+            ys.append(y + (k - 1 - j - (k - 1) / 2) * height)
+            vals.append(rate)
+            err[0].append(max(0.0, rate - lo))
+            err[1].append(max(0.0, hi - rate))
+        ax.barh(ys, vals, height=height * 0.95, xerr=err, capsize=2, label=lab, error_kw={"elinewidth": 0.8})
+    ax.set_yticks(y0)
+    ax.set_yticklabels([name for name, _ in rows], fontsize=8)
+    ax.set_xlim(0, 100)
+    ax.set_xlabel("success rate (%) with 95 % Wilson interval")
+    ax.set_title(title, fontsize=10)
+    ax.grid(axis="x", alpha=0.3)
+    if labels:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_summary(out_dir: str | Path, summary: Mapping[str, Any], *, title: str = "capmj benchmark results",
+                  sources: Sequence[str] = (), png: bool = True) -> dict[str, Path]:
+    """Write ``summary.json``, ``summary.md`` and (``png``) ``summary.png`` into ``out_dir``."""
+    out = Path(out_dir)
+    paths = {"json": out / SUMMARY_JSON, "md": out / SUMMARY_MD}
+    write_json_atomic(paths["json"], summary)
+    tmp = paths["md"].with_name(f".{SUMMARY_MD}.tmp")
+    tmp.write_text(markdown(summary, title=title, sources=sources))
+    tmp.replace(paths["md"])
+    if png and summary.get("overall"):
+        paths["png"] = plot(summary, out / SUMMARY_PNG, title=title)
+    return paths
+
+
+def summarize_dir(run_dir: str | Path) -> dict[str, Any]:
+    """The summary of one result folder's ``episodes.jsonl``."""
+    records, _ = read_results(Path(run_dir) / EPISODES)
+    return summarize(records)
+
+
+def _options_suffix(cfg: Mapping[str, Any] | None) -> str:
+    opts = (cfg or {}).get("agent_options") or {}
+    parts = [f"{k}={opts[k]}" for k in LABEL_OPTIONS if opts.get(k) is not None]
+    return f" ({', '.join(parts)})" if parts else ""
+
+
+def load_folders(dirs: Sequence[str | Path]) -> tuple[list[dict[str, Any]], dict[int, str], list[str]]:
+    """Records of several result folders with a column label per record (by ``id``).
+
+    A column is one (agent, model) configuration of one folder, labelled ``agent model`` plus the
+    LLM options of that folder's ``config.json`` that are set (reporter, attempts, temperature); if
+    two folders still give the same label, the folder name is appended.  Raises ``ConfigError``
+    for a folder without ``episodes.jsonl``.
+    """
+    per_folder: list[tuple[Path, list[dict[str, Any]], str]] = []
+    for d in dirs:
+        d = Path(d)
+        f = d / EPISODES
+        if not f.is_file():
+            raise ConfigError(f"{d} is not a result folder (no {EPISODES})")
+        records, _ = read_results(f)
+        per_folder.append((d, records, _options_suffix(load_json(d / CONFIG))))
+    base: dict[tuple[int, tuple[str, str | None]], str] = {}
+    for i, (d, records, suffix) in enumerate(per_folder):
+        for r in records:
+            base.setdefault((i, config_of(r)), default_label(*config_of(r)) + suffix)
+    counts: dict[str, int] = {}
+    for lab in base.values():
+        counts[lab] = counts.get(lab, 0) + 1
+    final = {key: (f"{lab} [{per_folder[key[0]][0].name}]" if counts[lab] > 1 else lab) for key, lab in base.items()}
+    out: list[dict[str, Any]] = []
+    labels: dict[int, str] = {}
+    for i, (d, records, _) in enumerate(per_folder):
+        for r in records:
+            labels[id(r)] = final[(i, config_of(r))]
+            out.append(r)
+    return out, labels, [str(d) for d, _, _ in per_folder]
+
+
+def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tuple[dict[str, Any], str]:
+    """Summary and Markdown over one or several result folders; written to ``out_dir`` when given."""
+    records, labels, sources = load_folders(dirs)
+    summary = summarize(records, label_of=lambda r: labels[id(r)])
+    summary["sources"] = sources
+    md = markdown(summary, sources=sources)
+    if out_dir is not None:
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        write_summary(out_dir, summary, sources=sources)
+    return summary, md
+
+
+__all__ = ["TASK_LETTERS", "load_folders", "markdown", "pct_cell", "plot", "report", "summarize_dir", "task_label",
+           "write_summary"]

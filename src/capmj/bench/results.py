@@ -1,0 +1,222 @@
+"""Result files of a benchmark run: ``episodes.jsonl`` (append-only, crash-safe) and the summary statistics.
+
+``episodes.jsonl`` has one JSON object per finished episode with every field of
+:class:`capmj.runner.EpisodeResult` (task, seed, agent, model, success, progress, reward,
+primitives, attempts, sim_s, wall_s, error, goal, diagnostics, llm, rrd).  Lines are appended by
+one process only (the grid's parent) as one ``write`` of a complete line followed by ``fsync``, so
+a run killed at any moment leaves complete lines plus at most one truncated last line, which
+:func:`read_results` skips and :class:`ResultsWriter` cuts off before appending again.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+EPISODES = "episodes.jsonl"
+CONFIG = "config.json"
+SUMMARY_JSON = "summary.json"
+SUMMARY_MD = "summary.md"
+SUMMARY_PNG = "summary.png"
+SUMMARY_SCHEMA = "capmj.bench-summary/1"
+REQUIRED_KEYS: tuple[str, ...] = ("task", "seed", "agent", "model", "success", "progress", "primitives",
+                                  "wall_s", "error", "rrd")
+
+Key = tuple[str, int, str, "str | None"]
+
+
+def episode_key(rec: Mapping[str, Any]) -> Key:
+    """The identity of an episode in a grid: (task, seed, agent, model)."""
+    return (str(rec["task"]), int(rec["seed"]), str(rec["agent"]), rec.get("model"))
+
+
+def read_results(path: str | Path) -> tuple[list[dict[str, Any]], int]:
+    """The complete records of a jsonl file and the number of lines skipped (truncated/corrupt).
+
+    A missing file is empty.  When the same key appears twice (should not happen) the last wins.
+    """
+    path = Path(path)
+    if not path.exists():
+        return [], 0
+    records: dict[Key, dict[str, Any]] = {}
+    bad = 0
+    with open(path, "rb") as f:
+        data = f.read()
+    for raw in data.split(b"\n"):
+        if not raw.strip():
+            continue
+        try:
+            rec = json.loads(raw)
+            key = episode_key(rec)
+        except (ValueError, KeyError, TypeError):
+            bad += 1
+            continue
+        records[key] = rec
+    return list(records.values()), bad
+
+
+class ResultsWriter:
+    """Appends result lines atomically (one ``os.write`` of a full line, then ``fsync``)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._repair()
+        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+
+    def _repair(self) -> None:
+        """Cut a truncated last line (a run killed mid-write) so the next line starts cleanly."""
+        if not self.path.exists():
+            return
+        with open(self.path, "rb+") as f:
+            data = f.read()
+            if not data or data.endswith(b"\n"):
+                return
+            cut = data.rfind(b"\n") + 1  # 0 when the file holds only a partial line
+            f.truncate(cut)
+            f.flush()
+            os.fsync(f.fileno())
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        line = (json.dumps(record, sort_keys=True, allow_nan=False, default=_json_default) + "\n").encode()
+        view = memoryview(line)
+        while view:  # os.write on a regular file writes everything in practice; loop for safety
+            n = os.write(self._fd, view)
+            view = view[n:]
+        os.fsync(self._fd)
+
+    def close(self) -> None:
+        if self._fd >= 0:
+            os.close(self._fd)
+            self._fd = -1
+
+    def __enter__(self) -> "ResultsWriter":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def _json_default(v: Any) -> Any:
+    if hasattr(v, "tolist"):
+        return v.tolist()
+    if isinstance(v, (set, frozenset, tuple)):
+        return list(v)
+    return str(v)
+
+
+def sanitize(record: Mapping[str, Any]) -> dict[str, Any]:
+    """A JSON-safe copy (NaN/inf become None) of a result record."""
+    def fix(v: Any) -> Any:
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        if isinstance(v, Mapping):
+            return {str(k): fix(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [fix(x) for x in v]
+        return v
+    return fix(dict(record))
+
+
+# ---------------------------------------------------------------------- statistics
+def wilson(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """The Wilson score interval of a binomial proportion (95 % by default); (0, 1) when n = 0."""
+    if n <= 0:
+        return 0.0, 1.0
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """n, successes, success rate with its 95 % Wilson interval, means and wall-time totals."""
+    n = len(records)
+    k = sum(1 for r in records if r.get("success") is True)
+    lo, hi = wilson(k, n)
+
+    def mean(field: str) -> float | None:
+        vals = [float(r[field]) for r in records if isinstance(r.get(field), (int, float))]
+        return sum(vals) / len(vals) if vals else None
+
+    wall = [float(r["wall_s"]) for r in records if isinstance(r.get("wall_s"), (int, float))]
+    return {
+        "n": n,
+        "successes": k,
+        "success_rate": k / n if n else None,
+        "ci95": [lo, hi],
+        "mean_progress": mean("progress"),
+        "mean_primitives": mean("primitives"),
+        "mean_sim_s": mean("sim_s"),
+        "errors": sum(1 for r in records if r.get("error")),
+        "wall_s_total": sum(wall),
+        "wall_s_mean": sum(wall) / len(wall) if wall else None,
+    }
+
+
+def config_of(rec: Mapping[str, Any]) -> tuple[str, str | None]:
+    return (str(rec.get("agent")), rec.get("model"))
+
+
+def default_label(agent: str, model: str | None) -> str:
+    return agent if not model else f"{agent} {model}"
+
+
+def summarize(records: Iterable[Mapping[str, Any]],
+              label_of: Callable[[Mapping[str, Any]], str] | None = None) -> dict[str, Any]:
+    """Per-task and overall statistics for each configuration found in ``records``.
+
+    A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
+    per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
+    :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for.
+    """
+    recs = list(records)
+    configs: dict[str, dict[str, Any]] = {}
+    by: dict[str, dict[str, list]] = {}
+    overall: dict[str, list] = {}
+    tasks: list[str] = []
+    for r in recs:
+        cfg = config_of(r)
+        label = label_of(r) if label_of else default_label(*cfg)
+        configs.setdefault(label, {"agent": cfg[0], "model": cfg[1]})
+        t = str(r["task"])
+        if t not in tasks:
+            tasks.append(t)
+        by.setdefault(t, {}).setdefault(label, []).append(r)
+        overall.setdefault(label, []).append(r)
+    return {
+        "schema": SUMMARY_SCHEMA,
+        "configs": configs,
+        "tasks": {t: {lab: stats(rs) for lab, rs in by[t].items()} for t in sorted(tasks)},
+        "overall": {lab: stats(rs) for lab, rs in overall.items()},
+    }
+
+
+def load_json(path: str | Path) -> dict[str, Any] | None:
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def write_json_atomic(path: str | Path, data: Any) -> None:
+    """Write JSON through a temporary file and ``os.replace`` (never a half-written file)."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    with open(tmp, "w") as f:
+        json.dump(data, f, indent=2, sort_keys=True, default=_json_default)
+        f.write("\n")
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+__all__ = [
+    "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
+    "config_of", "default_label", "episode_key", "load_json", "read_results", "sanitize", "stats", "summarize",
+    "wilson", "write_json_atomic",
+]

@@ -1,0 +1,5 @@
+import sys
+
+from capmj.replay.cli import main
+
+sys.exit(main())
