@@ -1,0 +1,556 @@
+"""The planner API: the only thing LLM-written plan code can touch.
+
+:class:`PlannerAPI` wraps one :class:`~capmj.agents.base.EpisodeContext` and hands out plain
+functions (closures) through :meth:`PlannerAPI.functions`.  Sandboxed code cannot reach a
+closure's cells (dunder and ``_private`` attribute access is rejected by the sandbox), and every
+value the functions return is plain data (str, float, list, tuple, dict, numpy array), so there is
+no public attribute path from plan code to the ``World``, ``MjModel`` or ``MjData``.
+
+Conventions (the spec's, stated at every function):
+
+* Positions are metres in the world frame: robot base at the origin, table top at z = 0,
+  workspace x ∈ [0.25, 0.75], y ∈ [−0.5, 0.5].  left = y−, right = y+, front = x+, rear = x−;
+  "top/bottom" of the workspace, an area or a corner = x−/x+ (front-camera image).
+* Rotations at this API are quaternions **(x, y, z, w)** (MuJoCo and ``Pose`` use (w, x, y, z)).
+* Object names are the unique ``ObjectSpec.name`` strings ("movable small blue block with
+  obj_id 3"), read from the live world on every call.  An int obj_id is accepted wherever a name
+  is; unknown names raise ``ValueError`` listing close and valid names.
+* Footprints: blocks, zones and fixture walls are oriented rectangles (their geoms' xy extent at
+  the current yaw), bowls and balls discs; a tilted object (> 20°) uses its world xy box.
+
+Every call is appended to :attr:`PlannerAPI.call_log` (function, arguments, result summary or
+error, simulated time) for the episode log.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import Any, Callable, Sequence
+
+import mujoco
+import numpy as np
+
+from capmj.agents.base import EpisodeContext
+from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
+from capmj.sim.robot import CUP_RADIUS
+from capmj.tasks.protocol import episode_rng
+
+WORKSPACE = (0.25, -0.5, 0.75, 0.5)
+"""(xmin, ymin, xmax, ymax) of the workspace, the default search area (m)."""
+REACH_RADIUS = 0.84
+"""Object centres farther than this (m, in xy) from the robot base are not offered as free
+positions: the far workspace corners (e.g. (0.73, 0.48)) are out of the UR5e's reach."""
+FREE_GRID_STEP = 0.005
+"""Pitch (m) of the candidate grid of :func:`get_random_free_pos`."""
+FREE_CLEARANCE = 0.045
+"""Default clearance (m) from a free position to every footprint: a big block (0.06 m, half
+diagonal 0.042 m) fits there at any yaw."""
+TILTED = math.radians(20.0)
+
+CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
+SIDE_NAMES = ("top side", "right side", "bottom side", "left side")
+_CORNERS_UV = ((0.0, 1.0), (1.0, 1.0), (0.0, 0.0), (1.0, 0.0))
+_SIDES_UV = ((0.5, 1.0), (1.0, 0.5), (0.5, 0.0), (0.0, 0.5))
+
+
+def denormalize_uv(u: float, v: float) -> tuple[float, float]:
+    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image."""
+    return 0.75 - 0.5 * float(v), -0.5 + float(u)
+
+
+def _xyzw_yaw(q: Sequence[float]) -> float:
+    x, y, z, w = (float(v) for v in q)
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def _euler_xyz(q_xyzw: Sequence[float]) -> list[float]:
+    """Roll, pitch, yaw (rad) of an (x, y, z, w) quaternion, as PyBullet's getEulerFromQuaternion."""
+    x, y, z, w = (float(v) for v in q_xyzw)
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return [roll, pitch, yaw]
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _is_vector(v: Any, lengths: tuple[int, ...] = (2, 3)) -> bool:
+    if isinstance(v, np.ndarray):
+        return v.ndim == 1 and len(v) in lengths and np.issubdtype(v.dtype, np.number)
+    return isinstance(v, (list, tuple)) and len(v) in lengths and all(_is_number(x) for x in v)
+
+
+def _is_pose(v: Any) -> bool:
+    """``(position, quaternion xyzw)``."""
+    return (isinstance(v, (list, tuple)) and len(v) == 2 and _is_vector(v[0]) and _is_vector(v[1], (4,)))
+
+
+def _summary(value: Any, limit: int = 160) -> str:
+    if isinstance(value, np.ndarray):
+        text = np.array2string(np.round(value, 4), separator=", ", threshold=20)
+    elif isinstance(value, float):
+        text = f"{value:.4f}"
+    elif isinstance(value, (list, tuple)) and value and all(isinstance(v, float) for v in value):
+        text = "[" + ", ".join(f"{v:.4f}" for v in value) + "]"
+    else:
+        text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+class PlannerAPI:
+    """The planner-facing facade of one episode (see the module docstring for conventions)."""
+
+    def __init__(self, ctx: EpisodeContext) -> None:
+        self._ctx = ctx
+        self._world = ctx.world
+        self._rng = episode_rng(ctx.seed, "api")
+        self.call_log: list[dict[str, Any]] = []
+        """One entry per API call: ``{"i", "fn", "args", "result" | "error", "sim_time"}``."""
+        self.messages: list[str] = []
+        """What the plan said through ``say``."""
+        w = self._world
+        # Static footprint parts per object: ("disc", radius) for bowls/balls, else its geoms.
+        self._geoms = {o.obj_id: [int(g) for g in np.flatnonzero(w.geom_obj == o.obj_id)] for o in w.objects}
+
+    # ================================================================== names
+    def _objects(self) -> tuple[ObjectSpec, ...]:
+        return tuple(self._world.objects)  # read live on every call
+
+    def _names(self) -> list[str]:
+        return [o.name for o in self._objects()]
+
+    def _resolve(self, obj: Any) -> ObjectSpec:
+        """The spec of a name (exact; case and spacing forgiven) or an int obj_id."""
+        objs = self._objects()
+        if isinstance(obj, (int, np.integer)) and not isinstance(obj, bool):
+            for o in objs:
+                if o.obj_id == int(obj):
+                    return o
+            raise ValueError(f"no object with obj_id {int(obj)}; valid ids: {sorted(o.obj_id for o in objs)}")
+        if not isinstance(obj, str):
+            raise ValueError(f"expected an object name (str), got {type(obj).__name__} {_summary(obj, 80)}")
+        for o in objs:
+            if o.name == obj:
+                return o
+        key = " ".join(obj.lower().split())
+        for o in objs:
+            if o.name.lower() == key:
+                return o
+        names = [o.name for o in objs]
+        close = difflib.get_close_matches(obj, names, n=3, cutoff=0.5)
+        hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+        shown = names[:6]
+        more = f" … ({len(names)} objects)" if len(names) > len(shown) else ""
+        raise ValueError(f"unknown object {obj!r}{hint} Valid names: {', '.join(map(repr, shown))}{more}")
+
+    # ================================================================== geometry
+    def _pos(self, oid: int) -> np.ndarray:
+        return np.asarray(self._world.pose(oid).pos, float)
+
+    def _xquat(self, oid: int) -> list[float]:
+        return [float(v) for v in self._world.pose(oid).xquat]
+
+    def _parts(self, o: ObjectSpec) -> list[tuple]:
+        """Footprint parts of an object now: ("disc", cx, cy, r) or ("rect", cx, cy, yaw, hx, hy)."""
+        w = self._world
+        pose = w.pose(o.obj_id)
+        if o.kind in ("bowl", "ball"):
+            r = BOWL_RADIUS if o.kind == "bowl" else BALL_RADIUS
+            return [("disc", pose.pos[0], pose.pos[1], r)]
+        if pose.tilt > TILTED:
+            lo, hi = w.aabb(o.obj_id)
+            return [("rect", (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0, (hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2)]
+        m, d = w.model, w.data
+        out = []
+        for g in self._geoms[o.obj_id]:
+            mat = d.geom_xmat[g].reshape(3, 3)
+            centre = d.geom_xpos[g] + mat @ m.geom_aabb[g, :3]
+            half = m.geom_aabb[g, 3:]
+            if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE):
+                out.append(("disc", centre[0], centre[1], float(half[0])))
+                continue
+            yaw = math.atan2(mat[1, 0], mat[0, 0])
+            out.append(("rect", centre[0], centre[1], yaw, float(half[0]), float(half[1])))
+        return out
+
+    def _part_arrays(self, objs: Sequence[ObjectSpec]) -> tuple[np.ndarray, np.ndarray]:
+        """Footprint parts of ``objs`` as one (k, 7) array [cx, cy, cos, sin, hx, hy, disc] and
+        the index into ``objs`` of every part."""
+        rows, owner = [], []
+        for k, o in enumerate(objs):
+            for p in self._parts(o):
+                if p[0] == "disc":
+                    rows.append((p[1], p[2], 1.0, 0.0, p[3], p[3], 1.0))
+                else:
+                    rows.append((p[1], p[2], math.cos(p[3]), math.sin(p[3]), p[4], p[5], 0.0))
+                owner.append(k)
+        return np.asarray(rows, float).reshape(-1, 7), np.asarray(owner, int)
+
+    @staticmethod
+    def _distances(px: np.ndarray, py: np.ndarray, parts: np.ndarray) -> np.ndarray:
+        """(n, k) distances (m) from points to footprint parts (0 inside)."""
+        dx = px[:, None] - parts[None, :, 0]
+        dy = py[:, None] - parts[None, :, 1]
+        c, s = parts[None, :, 2], parts[None, :, 3]
+        lx = np.abs(c * dx + s * dy) - parts[None, :, 4]
+        ly = np.abs(-s * dx + c * dy) - parts[None, :, 5]
+        rect = np.hypot(np.maximum(lx, 0.0), np.maximum(ly, 0.0))
+        disc = np.maximum(np.hypot(dx, dy) - parts[None, :, 4], 0.0)
+        return np.where(parts[None, :, 6] > 0, disc, rect)
+
+    def _footprint_distance(self, xy: Sequence[float], o: ObjectSpec) -> float:
+        parts, _ = self._part_arrays([o])
+        return float(self._distances(np.array([float(xy[0])]), np.array([float(xy[1])]), parts).min())
+
+    def _polygon(self, o: ObjectSpec):
+        from shapely.geometry import Point, Polygon
+        from shapely.ops import unary_union
+
+        shapes = []
+        for p in self._parts(o):
+            if p[0] == "disc":
+                shapes.append(Point(p[1], p[2]).buffer(p[3], 32))
+                continue
+            _, cx, cy, yaw, hx, hy = p
+            c, s = math.cos(yaw), math.sin(yaw)
+            shapes.append(Polygon([(cx + c * a - s * b, cy + s * a + c * b)
+                                   for a, b in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]))
+        return unary_union(shapes)
+
+    def _surface_z(self, xy: Sequence[float], exclude: set[int]) -> float:
+        """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
+        covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
+        z = 0.0
+        for o in self._objects():
+            if o.obj_id in exclude or o.kind == "zone":  # zones are flat marks, not surfaces
+                continue
+            if self._footprint_distance(xy, o) > 1e-3:
+                continue
+            if o.kind == "bowl":
+                c = self._pos(o.obj_id)
+                if math.hypot(xy[0] - c[0], xy[1] - c[1]) < BOWL_INNER_RADIUS:
+                    z = max(z, float(c[2]) - BOWL_HEIGHT / 2 + BOWL_FLOOR)
+                    continue
+            z = max(z, self._world.top_z(o.obj_id))
+        return z
+
+    def _resting_on(self, o: ObjectSpec) -> list[ObjectSpec]:
+        """Movable objects lying on top of ``o`` (centre over its footprint and above its top)."""
+        top = self._world.top_z(o.obj_id)
+        out = []
+        for other in self._objects():
+            if other.fixed or other.obj_id == o.obj_id:
+                continue
+            p = self._pos(other.obj_id)
+            if p[2] > top - 0.005 and self._footprint_distance(p[:2], o) <= 0.0:
+                out.append(other)
+        return out
+
+    # ================================================================== logging
+    def _logged(self, name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any, **kwargs: Any) -> Any:
+            entry: dict[str, Any] = {
+                "i": len(self.call_log), "fn": name,
+                "args": [_summary(a, 120) for a in args] + [f"{k}={_summary(v, 120)}" for k, v in kwargs.items()],
+                "sim_time": round(self._world.time, 4),
+            }
+            self.call_log.append(entry)
+            try:
+                result = fn(*args, **kwargs)
+            except Exception as exc:
+                entry["error"] = f"{type(exc).__name__}: {exc}"
+                raise
+            entry["result"] = _summary(result)
+            return result
+
+        call.__name__ = call.__qualname__ = name
+        call.__doc__ = fn.__doc__
+        return call
+
+    def log_text(self) -> str:
+        """The call log as text, one line per call."""
+        lines = []
+        for e in self.call_log:
+            out = f"-> {e['result']}" if "result" in e else f"!! {e.get('error', '(running)')}"
+            lines.append(f"[{e['i']:3d} t={e['sim_time']:.2f}s] {e['fn']}({', '.join(e['args'])}) {out}")
+        return "\n".join(lines)
+
+    def objects_text(self) -> str:
+        """The ``objects = [...]`` line listing every object of the scene for prompts."""
+        return f"objects = {self._names()!r}"
+
+    # ================================================================== the API
+    def functions(self) -> dict[str, Callable[..., Any]]:
+        """Plain functions for plan code, by name (each call logged in :attr:`call_log`)."""
+        api = self
+
+        def get_obj_names() -> list[str]:
+            """Names of every object in the scene (read from the live world)."""
+            return api._names()
+
+        def get_obj_pos(obj):
+            """[x, y, z] (m) of an object's geometric centre; a list of names gives a list."""
+            if isinstance(obj, (list, tuple, np.ndarray)):
+                return [get_obj_pos(o) for o in obj]
+            return [float(v) for v in api._pos(api._resolve(obj).obj_id)]
+
+        def get_obj_rot(obj):
+            """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list."""
+            if isinstance(obj, (list, tuple, np.ndarray)):
+                return [get_obj_rot(o) for o in obj]
+            return api._xquat(api._resolve(obj).obj_id)
+
+        def get_bbox(obj):
+            """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out."""
+            if isinstance(obj, (list, tuple, np.ndarray)):
+                return [get_bbox(o) for o in obj]
+            lo, hi = api._world.aabb(api._resolve(obj).obj_id)
+            return tuple(float(v) for v in (*lo, *hi))
+
+        def get_obj_pos_dict() -> dict[str, tuple[list[float], list[float]]]:
+            """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
+            return {o.name: ([float(v) for v in api._pos(o.obj_id)], _euler_xyz(api._xquat(o.obj_id)))
+                    for o in api._objects()}
+
+        def get_obj_positions_np(names) -> np.ndarray:
+            """(n, 3) array of object centres (m)."""
+            names = [names] if isinstance(names, (str, int)) else list(names)
+            return np.array([get_obj_pos(n) for n in names], float).reshape(-1, 3)
+
+        def get_obj_rotations_np(names) -> np.ndarray:
+            """(n, 4) array of object quaternions (x, y, z, w)."""
+            names = [names] if isinstance(names, (str, int)) else list(names)
+            return np.array([get_obj_rot(n) for n in names], float).reshape(-1, 4)
+
+        def get_color(obj) -> str:
+            """The colour name of an object ("red", "blue", ...)."""
+            return api._resolve(obj).color
+
+        def denormalize(pos):
+            """Normalised [u, v] (u left→right, v bottom→top, both in [0, 1]) → world [x, y]:
+            x = 0.75 − 0.5 v, y = −0.5 + u.  A third value (z) is passed through; a list of
+            points gives a list."""
+            arr = np.asarray(pos, float)
+            if arr.ndim == 2:
+                return [denormalize(p) for p in arr]
+            if arr.ndim != 1 or len(arr) not in (2, 3):
+                raise ValueError(f"denormalize expects [u, v] or [u, v, z], got {_summary(pos, 80)}")
+            x, y = denormalize_uv(arr[0], arr[1])
+            return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
+
+        def get_corner_name(pos) -> str:
+            """Name of the workspace corner nearest to a position ("top left corner", ...)."""
+            p = api._xy(pos)
+            corners = np.array([denormalize_uv(u, v) for u, v in _CORNERS_UV])
+            return CORNER_NAMES[int(np.argmin(np.hypot(*(corners - p).T)))]
+
+        def get_side_name(pos) -> str:
+            """Name of the workspace side nearest to a position ("top side", "right side", ...)."""
+            p = api._xy(pos)
+            sides = np.array([denormalize_uv(u, v) for u, v in _SIDES_UV])
+            return SIDE_NAMES[int(np.argmin(np.hypot(*(sides - p).T)))]
+
+        def is_target_occupied(targ, r: float = 0.02) -> list[str]:
+            """Names of the objects occupying a target.
+
+            ``targ`` a position ([x, y], [x, y, z] or (position, quaternion)): every object whose
+            footprint lies within ``r`` m of its xy.  ``targ`` a name: every other object whose
+            footprint overlaps that object's footprint (e.g. blocks in a zone, or the zone under a
+            block and whatever is stacked on it).  Zones, bowls and the like count as objects.
+            """
+            return api._occupied(targ, float(r))
+
+        def get_random_free_pos(targ=None, area=None, r: float = FREE_CLEARANCE, search_area=None) -> list[float]:
+            """A random free position [x, y, 0.0] (m) on the table.
+
+            ``area`` = (xmin, ymin, xmax, ymax), default the reachable workspace; the returned
+            centre keeps ``r`` from the area border when the area allows.  Free = at least ``r``
+            m from every object's footprint (the default 0.045 fits a big block at any yaw) and
+            not occupying ``targ`` (names, positions or poses to keep ``2 r`` from — objects are
+            avoided anyway).  Raises ValueError when nothing is free.
+            """
+            return api._free_pos(targ, search_area if area is None else area, float(r))
+
+        def put_first_on_second(obj, target) -> None:
+            """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
+
+            ``target``: a name → on that object's real top (a zone: at its centre on the table or
+            on what is stacked there; a bowl: inside, on its floor); [x, y] → at that point, resting
+            on whatever is there; [x, y, z] → centre at z, or resting on what is there when that
+            is higher; (position, quaternion xyzw) → also turned to the quaternion's yaw.
+            Raises ValueError for bad arguments and RuntimeError when the robot fails.
+            """
+            api._put(obj, target)
+
+        def stack_objects_in_order(names, targ=None) -> None:
+            """Stack ``names`` bottom (names[0]) to top; names[0] goes on ``targ`` when given,
+            otherwise it stays where it is.  Each next object goes on the previous one's top."""
+            if isinstance(names, (str, int)):
+                names = [names]
+            names = list(names)
+            if not names:
+                return
+            if targ is not None:
+                put_first_on_second(names[0], targ)
+            for lower, upper in zip(names, names[1:]):
+                put_first_on_second(upper, lower)
+
+        def say(msg) -> None:
+            """Record a message in the episode log."""
+            text = str(msg)
+            api.messages.append(text)
+            api._ctx.recorder.text("planner/say", text, api._world.time)
+
+        fns = {
+            "get_obj_names": get_obj_names, "get_obj_pos": get_obj_pos, "get_obj_rot": get_obj_rot,
+            "get_bbox": get_bbox, "get_obj_pos_dict": get_obj_pos_dict, "denormalize": denormalize,
+            "is_target_occupied": is_target_occupied, "get_random_free_pos": get_random_free_pos,
+            "put_first_on_second": put_first_on_second, "stack_objects_in_order": stack_objects_in_order,
+            "say": say, "get_obj_positions_np": get_obj_positions_np,
+            "get_obj_rotations_np": get_obj_rotations_np, "get_corner_name": get_corner_name,
+            "get_side_name": get_side_name, "get_color": get_color,
+        }
+        return {name: self._logged(name, fn) for name, fn in fns.items()}
+
+    # ================================================================== implementations
+    def _xy(self, pos: Any) -> np.ndarray:
+        """xy of a position, a pose or an object name."""
+        if isinstance(pos, (str, int, np.integer)) and not isinstance(pos, bool):
+            return self._pos(self._resolve(pos).obj_id)[:2]
+        if _is_pose(pos):
+            pos = pos[0]
+        if not _is_vector(pos):
+            raise ValueError(f"expected a position [x, y] or [x, y, z], got {_summary(pos, 80)}")
+        return np.asarray(pos, float)[:2]
+
+    def _occupied(self, targ: Any, r: float) -> list[str]:
+        objs = self._objects()
+        if isinstance(targ, (str, int, np.integer)) and not isinstance(targ, bool):
+            t = self._resolve(targ)
+            mine = self._polygon(t)
+            return [o.name for o in objs if o.obj_id != t.obj_id and mine.intersection(self._polygon(o)).area > 1e-6]
+        if isinstance(targ, (list, tuple)) and len(targ) == 1 and (_is_vector(targ[0]) or _is_pose(targ[0])):
+            targ = targ[0]  # the original API's one-element position lists
+        p = self._xy(targ)
+        parts, owner = self._part_arrays(objs)
+        if not len(parts):
+            return []
+        d = self._distances(np.array([p[0]]), np.array([p[1]]), parts)[0]
+        hit = set(owner[d <= r].tolist())
+        return [o.name for k, o in enumerate(objs) if k in hit]
+
+    def _free_pos(self, targ: Any, area: Any, r: float) -> list[float]:
+        if area is None and targ is not None and _is_vector(targ, (4,)):
+            area, targ = targ, None  # the original accepted the search area as the first argument
+        if area is None:
+            area = WORKSPACE
+        if not _is_vector(area, (4,)):
+            raise ValueError(f"area must be (xmin, ymin, xmax, ymax) in metres, got {_summary(area, 80)}")
+        if not r >= 0:
+            raise ValueError(f"r must be a clearance >= 0 in metres, got {r}")
+        xmin, ymin, xmax, ymax = (float(v) for v in area)
+        if xmin > xmax or ymin > ymax:
+            raise ValueError(f"area {area} is empty: the order is (xmin, ymin, xmax, ymax)")
+        # centres stay inside the workspace and, when the area is large enough, r from its border
+        wx0, wy0, wx1, wy1 = WORKSPACE
+        bx0, by0, bx1, by1 = max(xmin, wx0), max(ymin, wy0), min(xmax, wx1), min(ymax, wy1)
+        if bx0 > bx1 or by0 > by1:
+            raise ValueError(f"area {tuple(area)} lies outside the workspace {WORKSPACE}")
+        if bx1 - bx0 >= 2 * r + FREE_GRID_STEP and by1 - by0 >= 2 * r + FREE_GRID_STEP:
+            bx0, by0, bx1, by1 = bx0 + r, by0 + r, bx1 - r, by1 - r
+        nx = int(math.floor((bx1 - bx0) / FREE_GRID_STEP)) + 1
+        ny = int(math.floor((by1 - by0) / FREE_GRID_STEP)) + 1
+        xs = bx0 + FREE_GRID_STEP * np.arange(nx) + ((bx1 - bx0) - FREE_GRID_STEP * (nx - 1)) / 2
+        ys = by0 + FREE_GRID_STEP * np.arange(ny) + ((by1 - by0) - FREE_GRID_STEP * (ny - 1)) / 2
+        free = np.hypot(xs[:, None], ys[None, :]) <= REACH_RADIUS
+        parts, _ = self._part_arrays(self._objects())
+        extra = [self._xy(t) for t in self._targets(targ)]
+        if extra:
+            discs = np.array([(p[0], p[1], 1.0, 0.0, r, r, 1.0) for p in extra], float)
+            parts = np.vstack([parts, discs]) if len(parts) else discs
+        for part in parts:  # each part can only block the grid window around it
+            reach = (part[4] if part[6] else math.hypot(part[4], part[5])) + r
+            i0, i1 = np.searchsorted(xs, [part[0] - reach, part[0] + reach])
+            j0, j1 = np.searchsorted(ys, [part[1] - reach, part[1] + reach])
+            if i0 >= i1 or j0 >= j1:
+                continue
+            wx, wy = np.meshgrid(xs[i0:i1], ys[j0:j1], indexing="ij")
+            d = self._distances(wx.ravel(), wy.ravel(), part[None, :])[:, 0].reshape(wx.shape)
+            free[i0:i1, j0:j1] &= d >= r
+        idx = np.flatnonzero(free)
+        if not len(idx):
+            raise ValueError(f"no free position with clearance {r} m in area "
+                             f"({xmin:.3f}, {ymin:.3f}, {xmax:.3f}, {ymax:.3f})")
+        k = int(idx[int(self._rng.integers(len(idx)))])
+        return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
+
+    def _targets(self, targ: Any) -> list[Any]:
+        """``targ`` of get_random_free_pos as a list of names / positions / poses."""
+        if targ is None:
+            return []
+        if isinstance(targ, (str, int, np.integer)) or _is_vector(targ) or _is_pose(targ):
+            return [targ]
+        if isinstance(targ, (list, tuple, np.ndarray)):
+            return list(targ)
+        raise ValueError(f"targ must be a name, a position, a pose or a list of them, got {_summary(targ, 80)}")
+
+    def _put(self, obj: Any, target: Any) -> None:
+        w = self._world
+        if obj is None or target is None:
+            raise ValueError("put_first_on_second needs an object and a target")
+        # --- what to pick
+        held: ObjectSpec | None = None
+        if _is_vector(obj) or _is_pose(obj):
+            pick = self._xy(obj)
+        else:
+            held = self._resolve(obj)
+            if held.fixed:
+                raise ValueError(f"{held.name!r} is fixed and cannot be picked")
+            above = self._resting_on(held)
+            if above:
+                raise ValueError(f"cannot pick {held.name!r}: {above[0].name!r} lies on top of it; move that first")
+            pick = self._pos(held.obj_id)[:2]
+        exclude = {held.obj_id} if held is not None else set()
+        half = held.half_extents[2] if held is not None else 0.02
+        # --- where to put it
+        yaw: float | None = None
+        if isinstance(target, (str, int, np.integer)) and not isinstance(target, bool):
+            t = self._resolve(target)
+            if held is not None and t.obj_id == held.obj_id:
+                raise ValueError(f"cannot put {held.name!r} on itself")
+            c = self._pos(t.obj_id)
+            xy = c[:2]
+            if t.kind == "bowl":
+                surface = self._surface_z(xy, exclude)
+            else:
+                surface = max(self._surface_z(xy, exclude), 0.0 if t.kind == "zone" else w.top_z(t.obj_id))
+                if t.kind in ("block", "zone"):
+                    yaw = w.pose(t.obj_id).yaw  # line the object up with what it goes on
+            place = np.array([xy[0], xy[1], surface + half])
+        else:
+            if isinstance(target, (list, tuple)) and len(target) == 1 and (_is_vector(target[0]) or _is_pose(target[0])):
+                target = target[0]
+            if _is_pose(target):
+                yaw = _xyzw_yaw(target[1])
+                target = target[0]
+            if not _is_vector(target):
+                raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
+                                 f"xyzw), got {_summary(target, 80)}")
+            p = np.asarray(target, float)
+            rest = self._surface_z(p[:2], exclude) + half
+            place = np.array([p[0], p[1], max(rest, float(p[2])) if len(p) == 3 else rest])
+        if not np.all(np.isfinite(place)):
+            raise ValueError(f"target position {place.tolist()} is not finite")
+        res = self._ctx.pick_and_place(np.array([pick[0], pick[1], 0.0]), place, yaw)
+        what = held.name if held is not None else f"the object at {np.round(pick, 3).tolist()}"
+        if not res.ok:
+            raise RuntimeError(f"put_first_on_second({what!r}) failed: {res.status}: {res.message}")
+        if held is not None and res.obj_id != held.obj_id:
+            got = w.by_id[res.obj_id].name if res.obj_id in w.by_id else res.obj_id
+            raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
+
+
+__all__ = ["FREE_CLEARANCE", "PlannerAPI", "REACH_RADIUS", "WORKSPACE", "denormalize_uv"]
