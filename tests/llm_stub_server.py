@@ -138,7 +138,8 @@ def completion_body(request_json: dict[str, Any], text: str, serial: int) -> dic
 class StubLLMServer:
     """Context manager running the stub server in a daemon thread on an ephemeral port."""
 
-    def __init__(self, *, responder: Responder | None = None, default_text: str | None = None) -> None:
+    def __init__(self, *, responder: Responder | None = None,
+                 default_text: str | None = None) -> None:
         self._lock = threading.Lock()
         self._queue: deque[Reply] = deque()
         self._log: list[RecordedRequest] = []
@@ -262,7 +263,8 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
 
         def do_GET(self) -> None:  # noqa: N802 - http.server API
             if self.path.rstrip("/").endswith("/models"):
-                self._send_json(200, {"object": "list", "data": [{"id": "stub", "object": "model"}]})
+                models = [{"id": "stub", "object": "model"}]
+                self._send_json(200, {"object": "list", "data": models})
             else:
                 self._error(404, f"no route {self.path}")
 

@@ -290,7 +290,8 @@ class LLMClient:
             return response, attempt, None
         raise AssertionError("unreachable")  # pragma: no cover
 
-    def _to_completion(self, response: Any, *, start: float, attempts: int, purpose: str) -> Completion:
+    def _to_completion(self, response: Any, *, start: float, attempts: int,
+                       purpose: str) -> Completion:
         usage = getattr(response, "usage", None)
         model = getattr(response, "model", None)
         return Completion(
