@@ -48,6 +48,7 @@ APPLICATION_ID = "capmj"
 CAMERAS: tuple[str, ...] = ("front", "left", "right")
 MARKDOWN_TEXTS = frozenset({"goal", "verdict"})
 _FLUSH_FRAMES = 400          # frames buffered before a flush (20 s of simulated time)
+_RESET_GAP_S = 0.05          # sim_time gap inserted where the world was reset (one frame period)
 _POSE_EPS = 1e-5             # poses changing less than this (m / quaternion units) are not re-sent
 _DEPTH_MAX_MM = 65535
 
@@ -177,8 +178,8 @@ class RerunRecorder:
         if t is None:
             return self._now
         t = float(t)
-        if t < self._last_raw - 1e-9:  # the world was reset to its initial state (re-plan)
-            self._offset += self._last_raw - t
+        if t < self._last_raw - 1e-9:  # the world was reset to its initial state (re-plan):
+            self._offset += self._last_raw - t + _RESET_GAP_S  # continue the timeline after a small gap
         self._last_raw = t
         self._now = max(self._now, t + self._offset)
         return t + self._offset
@@ -466,6 +467,11 @@ class RerunRecorder:
             pass
         self.rec.flush()
         self.rec.disconnect()
+        if self._rig is not None and hasattr(self._rig, "close"):
+            try:
+                self._rig.close()
+            except Exception:  # noqa: BLE001
+                pass
         self._rig = None
         self._world = None
 

@@ -70,13 +70,19 @@ def _chunks(path: Path) -> Iterator[Any]:
 def _index_values(rb: Any, name: str) -> list[Any]:
     if name not in rb.schema.names:
         return [None] * rb.num_rows
-    return rb.column(name).to_pylist()
+    col = rb.column(name)
+    if str(col.type).startswith("duration"):
+        # pyarrow refuses nanosecond durations that are not whole microseconds as timedelta
+        import pyarrow as pa
+
+        return [None if v is None else v / 1e9 for v in col.cast(pa.int64()).to_pylist()]
+    return col.to_pylist()
 
 
 def _seconds(v: Any) -> float | None:
     if v is None:
         return None
-    return v.total_seconds() if hasattr(v, "total_seconds") else float(v) / 1e9
+    return v.total_seconds() if hasattr(v, "total_seconds") else float(v)
 
 
 def read_episode(path: str | Path) -> EpisodeLog:
@@ -153,18 +159,15 @@ def iter_images(path: str | Path) -> Iterator[LoggedImage]:
                 yield LoggedImage(ent, "depth" if comp == "DepthImage" else kind, prims[i], _seconds(times[i]), arr)
 
 
+_CHANNEL_DTYPES = {6: "uint8", 7: "int8", 8: "uint16", 9: "int16", 10: "uint32", 11: "int32", 12: "uint64",
+                   13: "int64", 33: "float16", 34: "float32", 35: "float64"}
+"""rerun's ``ChannelDatatype`` codes (as stored in ``ImageFormat.channel_datatype``) -> numpy dtype."""
+
+
 def _channel_dtype(code: Any) -> Any:
     import numpy as np
 
-    if code is None:
-        return np.uint8
-    try:
-        import rerun as rr
-
-        name = rr.datatypes.ChannelDatatype(int(code)).name.lower()
-        return np.dtype({"f16": "float16", "f32": "float32", "f64": "float64"}.get(name, name))
-    except Exception:  # noqa: BLE001
-        return np.uint16 if int(code) == 8 else np.uint8
+    return np.dtype(_CHANNEL_DTYPES.get(int(code), "uint8") if code is not None else "uint8")
 
 
 def export_frames(path: str | Path, out_dir: str | Path) -> list[Path]:
@@ -193,9 +196,9 @@ def export_frames(path: str | Path, out_dir: str | Path) -> list[Path]:
         else:
             arr = np.asarray(img.data)
             if arr.dtype == np.uint16:
-                pil = Image.fromarray(arr, mode="I;16") if arr.ndim == 2 else Image.fromarray(arr[..., 0], "I;16")
+                pil = Image.fromarray(arr if arr.ndim == 2 else arr[..., 0])  # 16-bit greyscale PNG
             elif arr.dtype.kind == "f":  # metres -> uint16 millimetres
-                pil = Image.fromarray(np.clip(np.nan_to_num(arr * 1000), 0, 65535).astype(np.uint16), mode="I;16")
+                pil = Image.fromarray(np.clip(np.nan_to_num(arr * 1000), 0, 65535).astype(np.uint16))
             else:
                 pil = Image.fromarray(arr.astype(np.uint8))
         pil.save(target, format="PNG")
