@@ -112,7 +112,7 @@ class PlannerAPI:
         self.messages: list[str] = []
         """What the plan said through ``say``."""
         w = self._world
-        # Static footprint parts per object: ("disc", radius) for bowls/balls, else its geoms.
+        # the geoms of every object (static; their poses are read live)
         self._geoms = {o.obj_id: [int(g) for g in np.flatnonzero(w.geom_obj == o.obj_id)] for o in w.objects}
 
     # ================================================================== names
@@ -393,10 +393,11 @@ class PlannerAPI:
             names = list(names)
             if not names:
                 return
+            put = logged["put_first_on_second"]  # each step appears in the call log
             if targ is not None:
-                put_first_on_second(names[0], targ)
+                put(names[0], targ)
             for lower, upper in zip(names, names[1:]):
-                put_first_on_second(upper, lower)
+                put(upper, lower)
 
         def say(msg) -> None:
             """Record a message in the episode log."""
@@ -413,7 +414,8 @@ class PlannerAPI:
             "get_obj_rotations_np": get_obj_rotations_np, "get_corner_name": get_corner_name,
             "get_side_name": get_side_name, "get_color": get_color,
         }
-        return {name: self._logged(name, fn) for name, fn in fns.items()}
+        logged = {name: self._logged(name, fn) for name, fn in fns.items()}
+        return dict(logged)
 
     # ================================================================== implementations
     def _xy(self, pos: Any) -> np.ndarray:
@@ -531,8 +533,8 @@ class PlannerAPI:
                     yaw = w.pose(t.obj_id).yaw  # line the object up with what it goes on
             place = np.array([xy[0], xy[1], surface + half])
         else:
-            if isinstance(target, (list, tuple)) and len(target) == 1 and (_is_vector(target[0]) or _is_pose(target[0])):
-                target = target[0]
+            if isinstance(target, (list, tuple)) and len(target) == 1:
+                target = target[0]  # the original API's one-element position lists
             if _is_pose(target):
                 yaw = _xyzw_yaw(target[1])
                 target = target[0]
