@@ -113,6 +113,10 @@ def agent(server: StubLLMServer, **kw: Any) -> LLMAgent:
     return LLMAgent("openai/stub", api_base=server.base_url, **kw)
 
 
+def a_transcript(a: LLMAgent) -> list[dict[str, Any]]:
+    return [c.to_dict() for c in a.transcript]
+
+
 def episode(a: LLMAgent, recorder: MemoryRecorder | None = None):
     return run_episode(get_task(TASK), SEED, a, recorder=recorder)
 
@@ -215,15 +219,20 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
 
 def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:
     """One attempt, no reporter: the right plan alone solves the task."""
-    server.respond_with(Router(planner=code(RIGHT_PLAN), parse_obj_name=code(OBJ_NAMES),
+    echo = "import numpy as np\nfrom env_utils import get_obj_names, put_first_on_second\n"
+    server.respond_with(Router(planner=code(echo + RIGHT_PLAN), parse_obj_name=code(OBJ_NAMES),
                                parse_function=parse_function_answer))
     a = agent(server)
-    result = episode(a)
+    rec = MemoryRecorder()
+    result = episode(a, rec)
     assert result.success and result.error is None and result.attempts == 1
-    lmps = [c.lmp for c in a.transcript]
+    # harmless echoes of the prompt's import header are dropped (import os would not be)
+    assert rec.texts["llm/attempt1/planner/1/removed_imports"] == [echo.strip()]
+    lmps = [c["lmp"] for c in a_transcript(a)]
     assert lmps == ["planner", "parse_function", "parse_function", "parse_obj_name"]
     name_call = a.transcript[3]
     assert "movable small cyan block with obj_id 3" in (name_call.result or "")
+    assert [c.lmp for c in a.transcript] == lmps
     assert result.llm["stopped"] == "plan finished"
 
 

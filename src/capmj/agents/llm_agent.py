@@ -147,6 +147,7 @@ class LLMAgent:
             if reporter is not None:
                 reporter.close()
             self._usage(client, notes)
+            ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
 

@@ -527,7 +527,8 @@ class LMPSession:
 
     def parse_function(self, name: str, site: str) -> str:
         """Source of ``def name(...)`` written for the call statement ``site``."""
-        question = f"# define function: {site.strip()}"
+        site = " ".join(site.split())
+        question = f"# define function: {site if site.endswith('.') else site + '.'}"
         call = self.next_call("parse_function", name)
         text = self.ask(call, self.messages(self.prompt("parse_function").render(question)))
         try:

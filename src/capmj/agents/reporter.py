@@ -144,6 +144,7 @@ class VLMReporter:
         self._rig: Any = None
         self._initial: np.ndarray | None = None
         self._render_error: str | None = None
+        self.last_visible_depth: np.ndarray | None = None
 
     # -- images ----------------------------------------------------------------------------
     def _render(self, ctx: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -170,7 +171,7 @@ class VLMReporter:
         if self._initial is None:
             raise ConfigError(f"no initial image: {self._render_error or 'start() was not called'}")
         rgb, depth = self._render(ctx)
-        visible = depth_to_visible(depth)
+        self.last_visible_depth = visible = depth_to_visible(depth)
         return to_png(self._initial), to_png(rgb), to_png(visible), rgb, depth
 
     def prompt_text(self, goal: str, objects: list[str]) -> str:
@@ -200,6 +201,7 @@ class VLMReporter:
         base = f"llm/attempt{session.attempt}/vlm_reporter/{call.n}"
         rec.image(f"{base}/final_rgb", rgb)
         rec.depth(f"{base}/final_depth", depth.astype(np.float32))
+        rec.image(f"{base}/final_depth_colormap", self.last_visible_depth)
         folder = Path(self.directory) if self.directory is not None else prompts_dir()
         objects = [o.name for o in ctx.world.objects]
         content = [
