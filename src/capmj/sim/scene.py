@@ -50,11 +50,16 @@ BOWL_WALL_SEGMENTS = 16
 
 @dataclass(frozen=True)
 class CompiledScene:
-    """A compiled model plus the lookup tables the world needs, all derived from the specs."""
+    """A compiled model plus the spec it came from (all derived from the object specs)."""
 
     model: mujoco.MjModel
     objects: tuple[ObjectSpec, ...]
-    xml: str
+    spec: mujoco.MjSpec
+
+    @property
+    def xml(self) -> str:
+        """The scene as MJCF (computed on demand: it costs ~50 ms, as much as compiling)."""
+        return self.spec.to_xml()
 
 
 def _lookat_quat(pos: Sequence[float], target: Sequence[float]) -> list[float]:
@@ -187,4 +192,4 @@ def compile_scene(objects: Sequence[ObjectSpec]) -> CompiledScene:
         model = spec.compile()
     except Exception as exc:  # mujoco raises ValueError with the compiler message
         raise SimError(f"scene failed to compile: {exc}") from exc
-    return CompiledScene(model=model, objects=tuple(objects), xml=spec.to_xml())
+    return CompiledScene(model=model, objects=tuple(objects), spec=spec)

@@ -42,7 +42,7 @@ class World:
         self.model: mujoco.MjModel = compiled.model
         self.data: mujoco.MjData = mujoco.MjData(self.model)
         self.objects: tuple[ObjectSpec, ...] = compiled.objects
-        self.xml = compiled.xml
+        self._compiled = compiled
         m = self.model
         self.by_id = {o.obj_id: o for o in self.objects}
         self.body_of = {o.obj_id: m.body(o.body).id for o in self.objects}
@@ -64,6 +64,11 @@ class World:
         from capmj.sim.suction import Suction
 
         self.suction = Suction(self)
+
+    @property
+    def xml(self) -> str:
+        """The compiled scene as MJCF (same specs -> identical text)."""
+        return self._compiled.xml
 
     # ------------------------------------------------------------------ stepping
     @property
