@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import base64
 import io
-import json
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -406,4 +405,32 @@ def test_agent_options_match_the_bench_factory() -> None:
         LLMAgent("gpt-4o-mini", reporter="audio")
     with pytest.raises(ConfigError):
         LLMAgent("gpt-4o-mini", attempts=0)
-    json.dumps({"ok": True})
+
+
+# ------------------------------------------------------------------------------------------------
+# code preparation (pure functions)
+# ------------------------------------------------------------------------------------------------
+def test_undefined_calls_finds_only_missing_bare_calls() -> None:
+    from capmj.agents.lmp import undefined_calls
+
+    src = ("def helper(x):\n    return x\n"
+           "a = helper(get_obj_pos('b'))\n"
+           "for n in sorted(objects):\n    b = missing_one(n, len(objects))\n"
+           "c = np.mean(other_missing([1]))\n"
+           "d = eval('1')\n"            # forbidden names are left to the sandbox
+           "e = [z for z in range(3)]\n")
+    found = undefined_calls(src, {"get_obj_pos", "objects"})
+    assert [(name, line) for name, line, _ in found] == [("missing_one", 5), ("other_missing", 6)]
+    assert found[0][2] == "b = missing_one(n, len(objects))"
+    assert undefined_calls("def broken(:\n", set()) == []
+
+
+def test_strip_benign_imports_keeps_dangerous_ones() -> None:
+    from capmj.agents.lmp import strip_benign_imports
+
+    src = ("import numpy as np\nfrom env_utils import get_obj_pos\nimport os\n"
+           "from plan_utils import secret_tool\nx = 1\n")
+    out, removed = strip_benign_imports(src, {"get_obj_pos", "np"})
+    assert removed == ["import numpy as np", "from env_utils import get_obj_pos"]
+    assert "import os" in out and "from plan_utils import secret_tool" in out
+    assert len(out.splitlines()) == len(src.splitlines())  # line numbers of errors stay right

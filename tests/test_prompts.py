@@ -140,3 +140,18 @@ def test_parse_completion_example_judges_truth(lmp: str, example) -> None:
     assert reason, "reporter examples explain their verdict"
     if "task" in example.meta:  # when a task predicate applies, it agrees
         assert ctx.verdict().success is expected
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("#@ example: a\nx = 1\n<<QUESTION>>\n", "has no '#@ end'"),
+    ("#@ end\n<<QUESTION>>\n", "outside an example"),
+    ("#@ example: a\n#@ end\n#@ example: a\n#@ end\n<<QUESTION>>\n", "duplicate example ids"),
+    ("x = 1\n", "no <<QUESTION>> placeholder"),
+    ("#@ example: a\n#@ example: b\n#@ end\n<<QUESTION>>\n", "starts inside"),
+])
+def test_malformed_prompt_files_are_rejected(tmp_path, text: str, message: str) -> None:
+    from capmj.errors import ConfigError
+
+    (tmp_path / "bad.py").write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_prompt("bad", tmp_path)
