@@ -210,6 +210,10 @@ def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tup
     records, labels, sources = load_folders(dirs)
     summary = summarize(records, label_of=lambda r: labels[id(r)])
     summary["sources"] = sources
+    if out_dir is not None and len(dirs) == 1 and Path(out_dir).resolve() == Path(dirs[0]).resolve():
+        previous = load_json(Path(out_dir) / SUMMARY_JSON) or {}
+        if "run" in previous:  # keep the timing facts of the run that produced the folder
+            summary["run"] = previous["run"]
     md = markdown(summary, sources=sources)
     if out_dir is not None:
         Path(out_dir).mkdir(parents=True, exist_ok=True)

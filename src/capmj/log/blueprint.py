@@ -19,6 +19,10 @@ from __future__ import annotations
 from typing import Sequence
 
 
+MAX_TEXT_TABS = 40
+"""More text documents than this stay reachable through the entity tree only."""
+
+
 def episode_blueprint(cameras: Sequence[str] = (), texts: Sequence[str] = ()):  # -> rrb.Blueprint
     import rerun.blueprint as rrb
 
@@ -31,7 +35,8 @@ def episode_blueprint(cameras: Sequence[str] = (), texts: Sequence[str] = ()):  
         right.append(rrb.Tabs(*views))
     # The summary already holds goal, verdict and diagnostics; other texts (LLM prompts, completions,
     # code...) get a tab each.  Every view costs a few kB in the file, so oracle logs stay minimal.
-    extra = [rrb.TextDocumentView(origin=f"/text/{k}", name=k) for k in texts if k not in ("goal", "verdict", "primitives")]
+    extra = [rrb.TextDocumentView(origin=f"/text/{k}", name=k) for k in texts
+             if k not in ("goal", "verdict", "primitives")][:MAX_TEXT_TABS]
     summary = rrb.TextDocumentView(origin="/summary", name="summary")
     right.append(rrb.Tabs(summary, *extra) if extra else summary)
     right.append(rrb.TextLogView(origin="/text/primitives", name="primitives"))
