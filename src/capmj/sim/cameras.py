@@ -1,0 +1,431 @@
+"""On-demand RGB-D + segmentation rendering of the scene cameras, and the top-down heightmap.
+
+:class:`CameraRig` renders the three perspective cameras of the scene ("front", "left", "right",
+640x480, fx = fy = 450) and builds a Ravens-style heightmap from the orthographic "top" camera.
+Nothing renders until asked (the oracle never does); the OpenGL context is created at the first
+render and shared by the whole process (see :mod:`capmj.sim.gl`).
+
+Per view two passes are drawn with shadows, reflections and multisampling off: a flat
+segmentation pass whose depth buffer gives the metric depth, and the shaded colour pass.
+
+Conventions
+-----------
+- Images are row-major, row 0 at the top, shape ``(H, W[, 3])``.
+- ``depth`` is the metric distance along the camera's optical axis (z-depth, not ray length).
+  Pixels that see nothing hold the far-plane distance (5 m in the scene).
+- ``seg`` holds capmj object ids (``ObjectSpec.obj_id``); 0 = robot, table, floor, background.
+- ``intrinsics`` is the pinhole matrix ``[[fx,0,cx],[0,fy,cy],[0,0,1]]`` with ``cx = W/2``,
+  ``cy = H/2`` (Ravens values); in these continuous coordinates the centre of pixel
+  ``(row v, column u)`` is at ``(u + 0.5, v + 0.5)``.
+- ``extrinsics`` is the camera-to-world pose with OpenCV axes (x right, y down, z forward), so
+  ``world = extrinsics @ [(u+0.5-cx)/fx*d, (v+0.5-cy)/fy*d, d, 1]``.
+- Heightmap: 320 rows = y from -0.5 to 0.5 (row 0 at y = -0.5), 160 columns = x from 0.25 to 0.75,
+  cell ``[r, c]`` covers ``x in [0.25 + c p, 0.25 + (c+1) p)``, ``y in [-0.5 + r p, ...)`` with
+  ``p = 0.003125``; values are metres above the table, clipped at 0.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from capmj.errors import ConfigError, RenderBackendError, SimError
+from capmj.sim.gl import ensure_gl_backend, register_cleanup, shared_gl_context
+from capmj.sim.gl import make_current as gl_make_current
+
+try:  # probe EGL/OSMesa if this module is the first to import mujoco; free if it already is
+    ensure_gl_backend()
+except RenderBackendError:  # importing must not fail: rendering raises it again when attempted
+    pass
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL, WORKSPACE
+
+VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
+"""The perspective cameras of the scene, in Ravens order."""
+DEPTH_BACKGROUND = 4.99
+"""Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
+
+_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
+_OBJ_BODY = re.compile(r"^obj(\d+)$")
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class CameraFrame:
+    """One rendered view (arrays are read-only)."""
+
+    name: str
+    rgb: np.ndarray
+    """uint8 (H, W, 3)."""
+    depth: np.ndarray
+    """float32 (H, W) metres along the optical axis."""
+    seg: np.ndarray
+    """int32 (H, W) object id per pixel, 0 = robot/table/background."""
+    intrinsics: np.ndarray
+    """float64 (3, 3)."""
+    extrinsics: np.ndarray
+    """float64 (4, 4) camera-to-world, OpenCV camera axes."""
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.depth.shape  # type: ignore[return-value]
+
+    def unproject(self, rows: Any, cols: Any) -> np.ndarray:
+        """World points (N, 3) seen at integer pixels ``(rows, cols)``, using the rendered depth."""
+        v = np.atleast_1d(np.asarray(rows))
+        u = np.atleast_1d(np.asarray(cols))
+        d = self.depth[v, u].astype(np.float64)
+        k = self.intrinsics
+        cam = np.stack([(u + 0.5 - k[0, 2]) / k[0, 0] * d, (v + 0.5 - k[1, 2]) / k[1, 1] * d, d], axis=-1)
+        return cam @ self.extrinsics[:3, :3].T + self.extrinsics[:3, 3]
+
+    def project(self, points: Any) -> np.ndarray:
+        """Continuous pixel coordinates (N, 2) as (u, v) of world points; pixel index = floor."""
+        p = np.atleast_2d(np.asarray(points, dtype=np.float64))
+        r, t = self.extrinsics[:3, :3], self.extrinsics[:3, 3]
+        cam = (p - t) @ r
+        uv = cam[:, :2] / cam[:, 2:3]
+        return uv * np.diag(self.intrinsics)[:2] + self.intrinsics[:2, 2]
+
+
+@dataclass(frozen=True, eq=False)
+class Heightmap:
+    """Ravens-style top-down heightmap of the workspace (arrays are read-only)."""
+
+    height: np.ndarray
+    """float32 (320, 160) metres above the table, clipped at 0; rows = y ascending, cols = x ascending."""
+    colormap: np.ndarray
+    """uint8 (320, 160, 3) top-down colour."""
+    seg: np.ndarray
+    """int32 (320, 160) object ids."""
+    pixel_size: float
+    bounds: np.ndarray
+    """(3, 2) workspace bounds: rows x, y, z; columns min, max."""
+
+    def pixel_of(self, x: float, y: float) -> tuple[int, int]:
+        """(row, col) of the cell containing world point (x, y) (a point on a cell edge: the upper cell)."""
+        return (int(np.floor((y - self.bounds[1, 0]) / self.pixel_size + 1e-9)),
+                int(np.floor((x - self.bounds[0, 0]) / self.pixel_size + 1e-9)))
+
+    def xy_of(self, row: int, col: int) -> tuple[float, float]:
+        """World (x, y) of the centre of cell (row, col)."""
+        return (float(self.bounds[0, 0] + (col + 0.5) * self.pixel_size),
+                float(self.bounds[1, 0] + (row + 0.5) * self.pixel_size))
+
+
+@dataclass(frozen=True, eq=False)
+class Observation:
+    """Everything :meth:`CameraRig.render_all` renders."""
+
+    views: Mapping[str, CameraFrame]
+    heightmap: Heightmap
+
+
+def _geom_object_ids(model: mujoco.MjModel) -> np.ndarray:
+    """Object id of each geom from body names ``obj<N>`` (used when given a bare model)."""
+    body_obj = np.zeros(model.nbody, dtype=np.int32)
+    for b in range(model.nbody):
+        match = _OBJ_BODY.match(model.body(b).name)
+        if match:
+            body_obj[b] = int(match.group(1))
+    return body_obj[model.geom_bodyid]
+
+
+_KEPT_AFTER_FORK: list = []
+
+
+def _free_mjr(holder: dict) -> None:
+    ctx = holder.pop("mjr", None)
+    if ctx is None:
+        return
+    if holder.get("pid") != os.getpid() or not gl_make_current():
+        # A forked child must make no GL call (Mesa deadlocks), not even in MjrContext's destructor.
+        _KEPT_AFTER_FORK.append(ctx)
+        return
+    ctx.free()
+
+
+class CameraRig:
+    """Renders the scene cameras of one world (or model) on demand; reuse it for every frame.
+
+    ``CameraRig(world)`` takes anything with ``.model``, ``.data`` and ``.geom_obj`` (a
+    :class:`~capmj.sim.world.World`); ``CameraRig(model, data=data)`` a bare MuJoCo model, whose
+    object ids are then read from the ``obj<N>`` body names.  The rig reads the live ``data`` at
+    each render.  Call :meth:`close` (or use it as a context manager) when done; leftovers are
+    freed at interpreter exit.
+    """
+
+    def __init__(self, world_or_model: Any, *, data: mujoco.MjData | None = None,
+                 width: int = 640, height: int = 480) -> None:
+        if isinstance(world_or_model, mujoco.MjModel):
+            self.model = world_or_model
+            if data is None:
+                data = mujoco.MjData(self.model)
+                mujoco.mj_forward(self.model, data)
+            self.data = data
+            self._geom_obj = _geom_object_ids(self.model)
+        else:
+            self.model = world_or_model.model
+            self.data = world_or_model.data if data is None else data
+            self._geom_obj = np.asarray(world_or_model.geom_obj, dtype=np.int32)
+        m = self.model
+        if not (0 < width <= m.vis.global_.offwidth and 0 < height <= m.vis.global_.offheight):
+            raise ConfigError(f"image size {width}x{height} must be within the model's offscreen buffer "
+                              f"{m.vis.global_.offwidth}x{m.vis.global_.offheight}")
+        self.width, self.height = int(width), int(height)
+        self.camera_names: tuple[str, ...] = tuple(
+            m.camera(i).name for i in range(m.ncam)
+            if m.cam_projection[i] == mujoco.mjtProjection.mjPROJ_PERSPECTIVE and m.camera(i).name)
+        self._cam_ids = {n: m.camera(n).id for n in self.camera_names}
+        try:
+            self._top_id = m.camera(HEIGHTMAP_CAMERA).id
+        except KeyError:
+            self._top_id = -1
+        self.bounds = np.array(WORKSPACE, dtype=np.float64)
+        self.pixel_size = HEIGHTMAP_PIXEL
+        self.hm_cols = int(round((self.bounds[0, 1] - self.bounds[0, 0]) / self.pixel_size))
+        self.hm_rows = int(round((self.bounds[1, 1] - self.bounds[1, 0]) / self.pixel_size))
+        robot = (self._geom_obj == 0) & (m.geom_bodyid != 0)
+        self._robot_geom = robot
+        self._near = float(m.vis.map.znear * m.stat.extent)
+        self._far = float(m.vis.map.zfar * m.stat.extent)
+        self._opt = mujoco.MjvOption()
+        self._cam = mujoco.MjvCamera()
+        self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        self._scene: mujoco.MjvScene | None = None
+        self._gpu: dict = {}
+        self._finalizer = None
+        self._closed = False
+        self._intrinsics: dict[str, np.ndarray] = {}
+        for name, cid in self._cam_ids.items():
+            fy = 0.5 * self.height / np.tan(np.radians(m.cam_fovy[cid]) / 2)
+            self._intrinsics[name] = _frozen(np.array([[fy, 0.0, self.width / 2], [0.0, fy, self.height / 2],
+                                                       [0.0, 0.0, 1.0]]))
+
+    # ------------------------------------------------------------------ context
+    def _context(self) -> mujoco.MjrContext:
+        if self._closed:
+            raise SimError("CameraRig is closed")
+        shared_gl_context()  # makes the shared context current; RenderBackendError if impossible
+        mjr = self._gpu.get("mjr")
+        if mjr is None:
+            mjr = mujoco.MjrContext(self.model, mujoco.mjtFontScale.mjFONTSCALE_50)
+            mjr.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+            self._gpu["mjr"] = mjr
+            self._gpu["pid"] = os.getpid()
+            self._finalizer = register_cleanup(self, _free_mjr, self._gpu)
+            self._scene = mujoco.MjvScene(self.model, maxgeom=max(1000, 4 * self.model.ngeom))
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, mjr)
+        return mjr
+
+    def close(self) -> None:
+        """Free the GPU resources of this rig (the shared GL context stays for other rigs)."""
+        if self._finalizer is not None and self._finalizer.alive:
+            self._finalizer()  # makes the shared context current itself (no GL call after a fork)
+        self._closed = True
+
+    def __enter__(self) -> "CameraRig":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ drawing
+    def _update(self, cam_id: int, hide_robot: bool = False) -> mujoco.MjvScene:
+        scene = self._scene
+        assert scene is not None
+        self._cam.fixedcamid = cam_id
+        mujoco.mjv_updateScene(self.model, self.data, self._opt, None, self._cam,
+                               mujoco.mjtCatBit.mjCAT_ALL, scene)
+        scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+        scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+        if hide_robot:
+            for g in scene.geoms[: scene.ngeom]:
+                if g.objtype == _GEOM and self._robot_geom[g.objid]:
+                    g.pos[2] = -1.0e4  # parked beyond the far plane
+        return scene
+
+    def _draw(self, scene: mujoco.MjvScene, mjr: mujoco.MjrContext, w: int, h: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Raw (bottom-up) rgb uint8, depth-buffer float32 and object-id int32 images."""
+        rect = mujoco.MjrRect(0, 0, w, h)
+        ids_rgb = np.empty((h, w, 3), np.uint8)
+        zbuf = np.empty((h, w), np.float32)
+        scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = 1
+        scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = 1
+        mujoco.mjr_render(rect, scene, mjr)
+        mujoco.mjr_readPixels(ids_rgb, zbuf, rect, mjr)
+        scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = 0
+        scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = 0
+        rgb = np.empty((h, w, 3), np.uint8)
+        mujoco.mjr_render(rect, scene, mjr)
+        mujoco.mjr_readPixels(rgb, None, rect, mjr)
+        # Segmentation colour = scene-geom segid + 1 (0 = nothing); map it to object ids.
+        lut = np.zeros(scene.ngeom + 2, np.int32)
+        for g in scene.geoms[: scene.ngeom]:
+            if g.objtype == _GEOM and 0 <= g.segid <= scene.ngeom:
+                lut[g.segid + 1] = self._geom_obj[g.objid]
+        code = ids_rgb[..., 0].astype(np.int32) | (ids_rgb[..., 1].astype(np.int32) << 8) \
+            | (ids_rgb[..., 2].astype(np.int32) << 16)
+        seg = lut[np.minimum(code, len(lut) - 1)]
+        return rgb, zbuf, seg
+
+    def _metric_depth(self, zbuf: np.ndarray, orthographic: bool) -> np.ndarray:
+        """Depth buffer (reversed z, as mujoco.Renderer) to metres; same formulas as mujoco.Renderer."""
+        z = zbuf.astype(np.float64)
+        far, near = np.float32(self._far), np.float32(self._near)
+        if orthographic:
+            return (far - z * (far - near)).astype(np.float32)
+        c = -(far + near) / (far - near)
+        d = -(np.float32(2) * far * near) / (far - near)
+        c = np.float32(-0.5) * c - np.float32(0.5)
+        d = np.float32(-0.5) * d
+        return (d / (z + c)).astype(np.float32)
+
+    def extrinsics(self, camera: str) -> np.ndarray:
+        """Camera-to-world 4x4 pose with OpenCV axes (x right, y down, z forward)."""
+        cid = self._camera_id(camera)
+        pose = np.eye(4)
+        pose[:3, :3] = self.data.cam_xmat[cid].reshape(3, 3) @ np.diag([1.0, -1.0, -1.0])
+        pose[:3, 3] = self.data.cam_xpos[cid]
+        return pose
+
+    def intrinsics(self, camera: str) -> np.ndarray:
+        return self._intrinsics[self._checked(camera)]
+
+    def _checked(self, camera: str) -> str:
+        if camera not in self._cam_ids:
+            extra = f" (the orthographic {HEIGHTMAP_CAMERA!r} camera is rendered by heightmap())" \
+                if self._top_id >= 0 else ""
+            raise ConfigError(f"unknown camera {camera!r}; valid cameras: {', '.join(self.camera_names)}{extra}")
+        return camera
+
+    def _camera_id(self, camera: str) -> int:
+        return self._cam_ids[self._checked(camera)]
+
+    # ------------------------------------------------------------------ public
+    def render(self, camera: str) -> CameraFrame:
+        """Render one perspective camera: RGB, metric depth, object segmentation, calibration."""
+        cid = self._camera_id(camera)
+        mjr = self._context()
+        scene = self._update(cid)
+        rgb, zbuf, seg = self._draw(scene, mjr, self.width, self.height)
+        depth = self._metric_depth(zbuf, orthographic=False)
+        return CameraFrame(
+            name=camera,
+            rgb=_frozen(np.ascontiguousarray(rgb[::-1])),
+            depth=_frozen(np.ascontiguousarray(depth[::-1])),
+            seg=_frozen(np.ascontiguousarray(seg[::-1])),
+            intrinsics=self._intrinsics[camera],
+            extrinsics=_frozen(self.extrinsics(camera)),
+        )
+
+    def heightmap(self, *, include_robot: bool = True) -> Heightmap:
+        """Top-down heightmap from the orthographic "top" camera (one cell per pixel).
+
+        ``include_robot=False`` leaves the arm and suction tool out (what the table would look like
+        without it); by default the heightmap shows what the camera sees, arm included.
+        """
+        if self._top_id < 0:
+            raise SimError(f"the model has no {HEIGHTMAP_CAMERA!r} camera")
+        m = self.model
+        if self.hm_rows > m.vis.global_.offheight or self.hm_cols > m.vis.global_.offwidth:
+            raise SimError(f"heightmap {self.hm_cols}x{self.hm_rows} exceeds the offscreen buffer")
+        mjr = self._context()
+        scene = self._update(self._top_id, hide_robot=not include_robot)
+        rgb, zbuf, seg = self._draw(scene, mjr, self.hm_cols, self.hm_rows)
+        depth = self._metric_depth(zbuf, orthographic=True)
+        cam_z = float(self.data.cam_xpos[self._top_id][2])
+        table_z = float(self.bounds[2, 0])
+        height = np.maximum(cam_z - depth.astype(np.float64) - table_z, 0.0).astype(np.float32)
+        # The camera looks down with image-up = +y, so the raw bottom-up GL rows are y ascending
+        # (Ravens convention) and columns are x ascending: no flip.
+        return Heightmap(height=_frozen(height), colormap=_frozen(rgb), seg=_frozen(seg),
+                         pixel_size=self.pixel_size, bounds=_frozen(self.bounds.copy()))
+
+    def render_all(self, *, include_robot: bool = True) -> Observation:
+        """The three perspective views and the heightmap."""
+        views = MappingProxyType({name: self.render(name) for name in self.camera_names})
+        return Observation(views=views, heightmap=self.heightmap(include_robot=include_robot))
+
+
+# ---------------------------------------------------------------------- visualisation helpers
+_VIRIDIS_ANCHORS = np.array([
+    [68, 1, 84], [71, 44, 122], [59, 82, 139], [44, 113, 142], [33, 145, 140],
+    [39, 173, 129], [92, 200, 99], [170, 220, 50], [253, 231, 37]], dtype=np.float64)
+_VIRIDIS = np.stack([np.interp(np.linspace(0, 1, 256), np.linspace(0, 1, len(_VIRIDIS_ANCHORS)),
+                               _VIRIDIS_ANCHORS[:, c]) for c in range(3)], axis=1).round().astype(np.uint8)
+"""256-entry viridis approximation (9 anchors, linear in between)."""
+_INVALID_RGB = np.array([40, 40, 40], np.uint8)
+
+
+def depth_to_visible(depth: np.ndarray, near: float | None = None, far: float | None = None, *,
+                     background: float = DEPTH_BACKGROUND) -> np.ndarray:
+    """Colour a depth image (metres) with viridis: near = bright yellow, far = dark blue-purple.
+
+    ``near``/``far`` default to the 1st/99th percentiles of the valid pixels, so the table and the
+    objects use the whole colour range.  Pixels that are non-finite or at/after ``background`` are
+    dark grey.  Returns uint8 (H, W, 3).  ``near > far`` is allowed (e.g. for heights:
+    ``depth_to_visible(hm.height, near=0.1, far=0.0)`` makes tall things bright).
+    """
+    d = np.asarray(depth, dtype=np.float64)
+    valid = np.isfinite(d) & (d < background)
+    out = np.empty(d.shape + (3,), np.uint8)
+    out[:] = _INVALID_RGB
+    if not valid.any():
+        return out
+    vals = d[valid]
+    lo = float(np.percentile(vals, 1)) if near is None else float(near)
+    hi = float(np.percentile(vals, 99)) if far is None else float(far)
+    span = hi - lo if hi != lo else 1e-6
+    t = np.clip((vals - lo) / span, 0.0, 1.0)
+    out[valid] = _VIRIDIS[np.round((1.0 - t) * 255).astype(np.int64)]
+    return out
+
+
+def seg_to_visible(seg: np.ndarray) -> np.ndarray:
+    """Colour an object-id image: 0 black, every id its own fixed bright colour. uint8 (H, W, 3)."""
+    ids = np.asarray(seg, dtype=np.int64)
+    golden = (ids * 0.61803398875) % 1.0  # well-spread hues for consecutive ids
+    h6 = golden * 6.0
+    x = 1.0 - np.abs(h6 % 2.0 - 1.0)
+    sector = np.floor(h6).astype(np.int64) % 6
+    c, z = np.ones_like(x), np.zeros_like(x)
+    table = [(c, x, z), (x, c, z), (z, c, x), (z, x, c), (x, z, c), (c, z, x)]
+    rgb = np.zeros(ids.shape + (3,))
+    for k, (r, g, b) in enumerate(table):
+        sel = sector == k
+        rgb[sel] = np.stack([r[sel], g[sel], b[sel]], axis=-1)
+    out = (55 + 200 * rgb).astype(np.uint8)
+    out[ids == 0] = 0
+    return out
+
+
+def to_png(array: np.ndarray) -> bytes:
+    """Encode a uint8 image (H, W), (H, W, 3) or (H, W, 4) as PNG bytes (Pillow).
+
+    Float depth images must be coloured first with :func:`depth_to_visible`.
+    """
+    from PIL import Image
+
+    a = np.asarray(array)
+    if a.dtype == np.bool_:
+        a = a.astype(np.uint8) * 255
+    if a.dtype != np.uint8:
+        raise ConfigError(f"to_png needs a uint8 image, got {a.dtype}; colour depth with depth_to_visible()")
+    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))):
+        raise ConfigError(f"to_png needs an (H, W), (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(a)).save(buf, format="PNG")
+    return buf.getvalue()
