@@ -115,6 +115,9 @@ def test_unreachable_place_is_a_typed_result() -> None:
     res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array([1.6, 0.0, 0.1]))
     assert not res.ok and res.status == "unreachable"
     assert "out of reach" in res.message
+    # the gripped block is put back down, not left hanging from the cup
+    assert w.suction.held is None
+    assert np.allclose(w.pose(1).pos, (0.5, 0.0, 0.02), atol=0.01)
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.6, -1.2])

@@ -47,6 +47,23 @@ class Primitives:
         tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
         return max(tops, default=0.0)
 
+    def _put_back(self, pick: np.ndarray, yaw: float) -> None:
+        """After a failed carry, lower the held object where it was picked and let go.
+
+        A primitive never ends with something dangling from the cup: the next primitive (or the
+        final settle) would otherwise drop it wherever the arm happens to be.
+        """
+        w, m, cfg = self.world, self.motion, self.cfg
+        placed = w.suction.held_touches_other
+        tip = w.tip_pose()[0]
+        m.move_to(np.array([pick[0], pick[1], tip[2]]), yaw, stop=placed)
+        m.move_to(np.array([pick[0], pick[1], 0.0]), yaw, speed=cfg.approach_speed, stop=placed)
+        w.suction.release()
+        w.step(cfg.release_dwell_steps)
+        tip = w.tip_pose()[0]
+        m.move_to(np.array([tip[0], tip[1], tip[2] + 0.1]), yaw)
+        w.settle(cfg.settle_steps, cfg.settle_tol)
+
     # ------------------------------------------------------------------ primitive
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
         """Pick at ``pick`` (xy; z ignored) and put the gripped object's centre at ``place``.
@@ -96,6 +113,7 @@ class Primitives:
         hang = tip[2] - (obj_pose.pos[2] - w.by_id[obj].half_extents[2])
         transit = max(cfg.min_transit_z, self.highest_top(exclude=obj) + cfg.clearance + hang)
         if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
+            self._put_back(pick, yaw)
             return result("unreachable", obj, "cannot lift to transit height")
         delta = 0.0 if place_yaw is None else _wrap(place_yaw - obj_pose.yaw, _QUARTER)
         new_yaw = yaw + delta
@@ -109,7 +127,8 @@ class Primitives:
             centre_z = self.surface_z(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
-            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach")
+            self._put_back(pick, yaw)
+            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
 
         # 3. down until the carried object touches, release, retreat, settle
         placed = w.suction.held_touches_other
