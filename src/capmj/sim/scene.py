@@ -100,7 +100,7 @@ def _add_world(spec: mujoco.MjSpec) -> None:
                  diffuse=[0.5, 0.5, 0.5], castshadow=False)
     wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[2.0, 2.0, 0.05], rgba=[0.25, 0.25, 0.27, 1],
                 friction=[1.0, 0.005, 0.0001])
-    wb.add_geom(name="workspace", type=mujoco.mjtGeom.mjGEOM_BOX, pos=[0.5, 0.0, -0.0004], size=[0.25, 0.5, 0.0003],
+    wb.add_geom(name="workspace", type=mujoco.mjtGeom.mjGEOM_BOX, pos=[0.5, 0.0, -0.0001], size=[0.25, 0.5, 0.0003],
                 rgba=[0.55, 0.5, 0.45, 1], contype=0, conaffinity=0)
     for name, (pos, target) in CAMERA_POSES.items():
         fovy = math.degrees(2 * math.atan(IMAGE_H / 2 / FOCAL))
