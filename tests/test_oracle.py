@@ -63,3 +63,23 @@ def test_runner_records_agent_exceptions_as_failed_episodes() -> None:
 def test_runner_records_broken_tasks_as_failed_episodes() -> None:
     res = run_episode(_BrokenTask(), 1, OracleAgent())
     assert not res.success and res.error == "ZeroDivisionError: generator bug"
+
+
+def test_reset_restores_the_initial_state_and_motion_stays_fast() -> None:
+    from capmj.agents.base import EpisodeContext
+    from capmj.sim.world import World
+    from capmj.tasks.protocol import make_scene
+
+    task = get_task("stack-all-blocks-on-a-zone")
+    scene = make_scene(task, 10001)
+    world = World(scene.objects)
+    ctx = EpisodeContext(task, 10001, scene, world)
+    block = world.movable_ids[0]
+    start = np.asarray(world.pose(block).pos)
+    first = ctx.pick_and_place(start, np.array([0.45, 0.3]), 2.5)  # ends with the wrist turned
+    assert first.ok
+    ctx.reset()
+    assert np.allclose(world.pose(block).pos, start, atol=1e-9)
+    assert ctx.primitives == 0 and ctx.attempt == 1
+    again = ctx.pick_and_place(start, np.array([0.45, 0.3]), 2.5)
+    assert again.ok and again.steps == first.steps  # same motion from the same state

@@ -65,6 +65,7 @@ class EpisodeContext:
     def reset(self) -> None:
         """Restore the episode's initial state (before a re-plan)."""
         self.world.restore(self._initial)
+        self.prims = Primitives(self.world, self.prims.cfg)  # motion state must match the restored arm
         self.attempt += 1
         self.primitives = 0
         self._attempt_steps0 = self.world.steps

@@ -46,19 +46,6 @@ DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
 """Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
 
 
-def _reset(ctx: EpisodeContext) -> None:
-    """Reset the episode to its initial state before a re-plan.
-
-    ``EpisodeContext.reset()`` restores the physics but keeps the motion planner, which remembers
-    the wrist yaw of the last move; planning the first move after a reset from that stale yaw
-    costs minutes of IK.  A fresh ``Primitives`` reads the restored arm state.
-    """
-    ctx.reset()
-    prims = getattr(ctx, "prims", None)
-    if prims is not None:
-        ctx.prims = type(prims)(ctx.world, prims.motion.cfg)
-
-
 class LLMAgent:
     """Plans with an LLM through the planner API; optional reporter and re-planning.
 
@@ -125,7 +112,7 @@ class LLMAgent:
                 reporter.start(ctx)
             for k in range(1, self.attempts + 1):
                 if k > 1:
-                    _reset(ctx)
+                    ctx.reset()
                 record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter, feedback)
                 attempts.append(record)
                 self._usage(client, notes)

@@ -116,6 +116,8 @@ class Motion:
         scale = 1.0
         q_prev = self.world.data.ctrl[:6].copy()
         for _ in range(6):
+            if scale > 20.0:
+                return None  # would need a crawl: the joints cannot follow this line
             total, s = self._profile(eff, speed / scale, cfg.accel / scale**2)
             n = max(1, int(np.ceil(total / cfg.ik_dt)))
             dt = total / n if total > 0 else cfg.ik_dt
@@ -174,11 +176,23 @@ class Motion:
                 return True, steps
         return False, steps
 
+    def commanded_yaw(self) -> float:
+        """Tool yaw of the currently commanded joints (read from the arm, never remembered)."""
+        self.ik.tip_position(self.world.data.ctrl[:6].copy())
+        rot = self.ik.data.site_xmat[self.ik.site].reshape(3, 3)
+        return float(np.arctan2(rot[1, 0], rot[0, 0]))
+
     def move_to(self, pos: np.ndarray, yaw: float, speed: float | None = None,
                 stop: Callable[[], bool] | None = None) -> tuple[str, int]:
-        """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps)."""
+        """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps).
+
+        The start pose is read from the commanded joints, so a state restore (re-plan) or a
+        stopped move can never leave a stale start yaw behind.
+        """
         start = self.ik.tip_position(self.world.data.ctrl[:6].copy())
-        plan = self.plan_line(start, np.asarray(pos, float), self.tool_yaw, yaw, speed or self.cfg.speed)
+        yaw0 = self.commanded_yaw()
+        yaw0 = yaw + ((yaw0 - yaw + np.pi) % (2 * np.pi) - np.pi)  # same angle, nearest the goal
+        plan = self.plan_line(start, np.asarray(pos, float), yaw0, yaw, speed or self.cfg.speed)
         if plan is None:
             return "unreachable", 0
         self.tool_yaw = yaw
