@@ -4,7 +4,8 @@ Random pick-and-places of small and big blocks across the workspace, onto the ta
 blocks, in worlds rebuilt every ``--per-world`` trials.  A trial succeeds when the carried block
 ends within 1 cm (xy) and 1.5 cm (z) of its target, upright.  Wall time per primitive is measured
 without rendering on every trial, and with the three cameras + heightmap rendered once after each
-primitive on the first ``--rendered`` trials.  The stacking part builds towers of 2–8 small blocks.
+primitive on ``--rendered`` extra trials, once with the arm's visual meshes and once with its
+collision capsules (``CameraRig(robot_meshes=False)``).  The stacking part builds towers of 2–8 small blocks.
 
     python benchmarks/primitives.py [--trials 1000] [--seed 0]
 """
@@ -143,22 +144,26 @@ def main(argv: list[str] | None = None) -> int:
     print(file=sys.stderr)
     step_share = timer.seconds / wall_plain if wall_plain else 0.0
 
-    rendered_wall, rendered_n, render_note = 0.0, 0, None
-    try:
-        from capmj.sim.cameras import CameraRig
+    rendered: dict[str, float | None] = {}
+    render_note = None
+    for label, meshes in (("mesh_arm", True), ("capsule_arm", False)):
+        try:
+            from capmj.sim.cameras import CameraRig
 
-        w = random_world(rng)
-        w.settle()
-        prims, rig = Primitives(w), CameraRig(w)
-        for _ in range(args.rendered):
-            t0 = time.perf_counter()
-            one_trial(w, prims, rng)
-            rig.render_all()
-            rendered_wall += time.perf_counter() - t0
-            rendered_n += 1
-        rig.close()
-    except Exception as exc:  # noqa: BLE001 - report, don't hide the other figures
-        render_note = f"{type(exc).__name__}: {exc}"
+            w = random_world(rng)
+            w.settle()
+            prims, rig = Primitives(w), CameraRig(w, robot_meshes=meshes)
+            wall = 0.0
+            for _ in range(args.rendered):
+                t0 = time.perf_counter()
+                one_trial(w, prims, rng)
+                rig.render_all()
+                wall += time.perf_counter() - t0
+            rig.close()
+            rendered[label] = wall / args.rendered if args.rendered else None
+        except Exception as exc:  # noqa: BLE001 - report, don't hide the other figures
+            render_note = f"{type(exc).__name__}: {exc}"
+            rendered[label] = None
 
     stack = {}
     for h in range(2, 9):
@@ -175,8 +180,9 @@ def main(argv: list[str] | None = None) -> int:
         "placement_error_m_median": float(np.median(err)),
         "placement_error_m_p99": float(np.percentile(err, 99)),
         "wall_s_per_primitive": wall_plain / args.trials,
-        "wall_s_per_primitive_rendered": (rendered_wall / rendered_n) if rendered_n else None,
-        "rendered_trials": rendered_n,
+        "wall_s_per_primitive_rendered": rendered.get("mesh_arm"),
+        "wall_s_per_primitive_rendered_capsule_arm": rendered.get("capsule_arm"),
+        "rendered_trials": args.rendered,
         "render_error": render_note,
         "sim_s_per_primitive": sim_s / args.trials,
         "physics_steps_per_s": steps / wall_plain,

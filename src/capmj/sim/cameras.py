@@ -159,6 +159,8 @@ def _free_mjr(holder: dict) -> None:
 class CameraRig:
     """Renders the scene cameras of one world (or model) on demand; reuse it for every frame.
 
+    ``robot_meshes=False`` draws the arm as its collision capsules, for speed.
+
     ``CameraRig(world)`` takes anything with ``.model``, ``.data`` and ``.geom_obj`` (a
     :class:`~capmj.sim.world.World`); ``CameraRig(model, data=data)`` a bare MuJoCo model, whose
     object ids are then read from the ``obj<N>`` body names.  The rig reads the live ``data`` at
@@ -167,7 +169,7 @@ class CameraRig:
     """
 
     def __init__(self, world_or_model: Any, *, data: mujoco.MjData | None = None,
-                 width: int = 640, height: int = 480) -> None:
+                 width: int = 640, height: int = 480, robot_meshes: bool = True) -> None:
         if isinstance(world_or_model, mujoco.MjModel):
             self.model = world_or_model
             if data is None:
@@ -201,6 +203,11 @@ class CameraRig:
         self._near = float(m.vis.map.znear * m.stat.extent)
         self._far = float(m.vis.map.zfar * m.stat.extent)
         self._opt = mujoco.MjvOption()
+        if not robot_meshes:
+            # The arm's collision capsules (group 3) instead of its visual meshes (group 2):
+            # measured 2.5x faster for the three views + heightmap on llvmpipe.
+            self._opt.geomgroup[2] = 0
+            self._opt.geomgroup[3] = 1
         self._cam = mujoco.MjvCamera()
         self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._scene: mujoco.MjvScene | None = None

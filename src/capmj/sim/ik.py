@@ -48,6 +48,7 @@ class SuctionIK:
         self._tcp[2, 3] = CUP_LENGTH
         self.lo = model.jnt_range[[model.dof_jntid[d] for d in arm_dof], 0]
         self.hi = model.jnt_range[[model.dof_jntid[d] for d in arm_dof], 1]
+        self._weights = np.array([1.0, 1.0, 1.0, 0.5, 0.5, 0.2])
         self._jacp = np.zeros((3, model.nv))
         self._jacr = np.zeros((3, model.nv))
 
@@ -58,19 +59,16 @@ class SuctionIK:
         target[:3, :3] = rot
         target[:3, 3] = pos
         sols = self._solver.inverse_kinematics_with_tcp(target, self._tcp)
-        best, best_cost = None, np.inf
-        for q in sols:
-            if not np.all(np.isfinite(q)):
-                continue
-            # Joints with 2*pi ranges admit q and q +- 2*pi: take the branch nearest q_near.
-            q = q_near + np.mod(q - q_near + np.pi, 2 * np.pi) - np.pi
-            if np.any(q < self.lo) or np.any(q > self.hi):
-                continue
-            cost = float(np.sum((q - q_near) ** 2 * np.array([1.0, 1.0, 1.0, 0.5, 0.5, 0.2])))
-            if cost < best_cost:
-                best, best_cost = q, cost
-        if best is None:
+        if not sols:
             return IKResult(None, np.inf)
+        q = np.asarray(sols, dtype=float)
+        # Joints with 2*pi ranges admit q and q +- 2*pi: take the branch nearest q_near.
+        q = q_near + np.mod(q - q_near + np.pi, 2 * np.pi) - np.pi
+        ok = np.isfinite(q).all(axis=1) & (q >= self.lo).all(axis=1) & (q <= self.hi).all(axis=1)
+        if not ok.any():
+            return IKResult(None, np.inf)
+        cost = np.where(ok, ((q - q_near) ** 2 * self._weights).sum(axis=1), np.inf)
+        best = q[int(np.argmin(cost))]
         return self._refine(best, np.asarray(pos, float), rot, tol)
 
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:

@@ -142,20 +142,27 @@ class Motion:
         return _Plan(arr, dt)
 
     def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None, max_steps: int = 20000) -> tuple[bool, int]:
-        """Track a plan with velocity feed-forward; returns (stopped_early, steps)."""
+        """Track a plan with velocity feed-forward; returns (stopped_early, steps).
+
+        The whole control sequence is interpolated up front (vectorised), so the per-step Python
+        work is one row copy, the physics step and the optional stop check.
+        """
         w = self.world
         ts = w.model.opt.timestep
         qs, dt = plan.qs, plan.dt
         n = len(qs) - 1
-        vel = np.vstack([np.diff(qs, axis=0) / dt, np.zeros((1, 6))]) if n > 0 else np.zeros((1, 6))
-        total_steps = int(round(n * dt / ts))
+        total_steps = min(int(round(n * dt / ts)), max_steps)
+        if n > 0 and total_steps > 0:
+            t = (np.arange(total_steps) + 1) * ts
+            i = np.minimum((t / dt).astype(int), n - 1)
+            a = np.minimum((t - i * dt) / dt, 1.0)[:, None]
+            vel = np.diff(qs, axis=0) / dt
+            ctrl = qs[i] + a * (qs[i + 1] - qs[i]) + self._ff * vel[i]
+        else:
+            ctrl = np.empty((0, 6))
         steps = 0
-        for k in range(min(total_steps, max_steps)):
-            t = (k + 1) * ts
-            i = min(int(t / dt), n - 1) if n > 0 else 0
-            a = (t - i * dt) / dt if n > 0 else 0.0
-            q_ref = qs[i] + min(a, 1.0) * (qs[i + 1] - qs[i]) if n > 0 else qs[0]
-            w.data.ctrl[:6] = q_ref + self._ff * vel[i]
+        for row in ctrl:
+            w.data.ctrl[:6] = row
             w.step()
             steps += 1
             if stop is not None and stop():

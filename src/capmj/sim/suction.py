@@ -22,6 +22,7 @@ class Suction:
         self.world = world
         self.held: int | None = None
         self._suction_body = world.model.body("suction").id
+        self._movable = frozenset(world.movable_ids)
 
     def sync(self) -> None:
         """Re-derive ``held`` from the active welds (after a state restore)."""
@@ -29,10 +30,23 @@ class Suction:
         self.held = next((i for i, e in self.world.weld_of.items() if d.eq_active[e]), None)
 
     def touching(self) -> int | None:
-        """The movable object the cup touches, if any (lowest obj_id when several)."""
+        """The movable object the cup touches, if any (lowest obj_id when several).
+
+        Called every physics step during descents, so it scans the contact list once.
+        """
         w = self.world
-        touched = [i for i in w.movable_ids if -1 in w.contacts_of(i)]
-        return min(touched) if touched else None
+        d = w.data
+        if d.ncon == 0:
+            return None
+        geoms = d.contact.geom[: d.ncon]
+        cup = w.cup_geom
+        rows = (geoms[:, 0] == cup) | (geoms[:, 1] == cup)
+        if not rows.any():
+            return None
+        pairs = geoms[rows]
+        owners = w.geom_obj[np.where(pairs[:, 0] == cup, pairs[:, 1], pairs[:, 0])]
+        movable = [int(o) for o in owners if o in self._movable]
+        return min(movable) if movable else None
 
     def grip(self) -> int | None:
         """Activate the weld of the touched movable object; returns its id or None."""
