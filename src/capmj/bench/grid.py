@@ -34,6 +34,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from capmj.bench.results import ResultsWriter, episode_key, sanitize
 
 MP_CONTEXT = "spawn"
+RECYCLE_LOGGING_WORKERS = 200
+"""Episodes a worker runs before it is replaced when it writes .rrd logs (see run_jobs_to_file)."""
 
 
 @dataclass(frozen=True)
@@ -136,9 +138,10 @@ class Grid:
     """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process)."""
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
-                 registered: Sequence[Any] = ()) -> None:
+                 registered: Sequence[Any] = (), recycle_after: int | None = None) -> None:
         self.agent = agent
         self.workers = max(0, int(workers))
+        self.recycle_after = recycle_after
         self.on_result = on_result
         self.registered = pickle.dumps(list(registered)) if registered else None
         self.stats = GridStats()
@@ -148,7 +151,7 @@ class Grid:
     def _new_pool(self) -> ProcessPoolExecutor:
         ctx = multiprocessing.get_context(MP_CONTEXT)
         return ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=init_worker,
-                                   initargs=(self.agent, self.registered))
+                                   initargs=(self.agent, self.registered), max_tasks_per_child=self.recycle_after)
 
     def _exit_codes(self) -> list[int]:
         procs = getattr(self._pool, "_processes", None) or {}
@@ -270,7 +273,12 @@ def _describe_codes(codes: Sequence[int]) -> str:
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
                      writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
                      registered: Sequence[Any] = ()) -> GridStats:
-    """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``)."""
+    """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``).
+
+    When episodes are logged, workers are replaced every :data:`RECYCLE_LOGGING_WORKERS` episodes:
+    rerun never frees a Python ``RecordingStream`` (its threads outlive it, rerun issue #2116), so
+    a worker writing one ``.rrd`` per episode would otherwise gain four idle threads per episode.
+    """
     out_dir = Path(out_dir).resolve()
 
     def on_result(job: Job, rec: dict[str, Any]) -> None:
@@ -284,7 +292,9 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
         if progress is not None:
             progress(rec)
 
-    grid = Grid(agent, workers=workers, on_result=on_result, registered=registered)
+    logging = any(j.rrd for j in jobs)
+    grid = Grid(agent, workers=workers, on_result=on_result, registered=registered,
+                recycle_after=RECYCLE_LOGGING_WORKERS if logging else None)
     t0 = time.perf_counter()
     stats = grid.run(jobs)
     stats.wall_s = time.perf_counter() - t0

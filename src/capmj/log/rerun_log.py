@@ -465,8 +465,12 @@ class RerunRecorder:
                                                       sorted(self.text_counts)), make_active=True, make_default=True)
         except Exception:  # noqa: BLE001 - a layout is a convenience; the data is already written
             pass
-        self.rec.flush()
-        self.rec.disconnect()
+        rec, self.rec = self.rec, None
+        rec.flush()
+        rec.disconnect()
+        # Drop the stream now: its writer/batcher threads live as long as the Python object, and the
+        # recorder itself may linger in reference cycles (world <-> listeners) until the next GC.
+        del rec
         if self._rig is not None and hasattr(self._rig, "close"):
             try:
                 self._rig.close()
