@@ -1,0 +1,185 @@
+"""Layers 1 and 2 of the sandbox: the static allow-list check and the AST rewrite.
+
+:func:`check_code` parses plan code and rejects, with the offending line, every construct that
+could reach the interpreter (imports, classes, dunder names, ``_private`` attributes, known
+dangerous names and attributes); :class:`_Rewriter` then routes the operations that can grow
+without bound (``*``, ``**``, ``<<``, ``+``, growing methods, ``while`` loops, ``except``
+handlers) through ``__cap_*`` guards provided at run time.  Both live together because the
+rewrite is only sound on checked code: user code can never write a ``__`` name, so it cannot
+shadow or call the guards itself.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+
+from capmj.errors import PlanError
+
+FORBIDDEN_NAMES = frozenset({
+    "exec", "eval", "compile", "open", "globals", "locals", "vars", "dir", "getattr", "setattr",
+    "delattr", "hasattr", "input", "breakpoint", "help", "memoryview", "type", "object",
+    "super", "classmethod", "staticmethod", "property", "exit", "quit", "BaseException",
+})
+"""Rejected wherever the code reads them without binding them itself (none is a builtin here)."""
+
+FORBIDDEN_ATTRIBUTES = frozenset({
+    "tofile", "dump", "dumps", "ctypes", "load", "loads", "save", "savez", "savez_compressed",
+    "savetxt", "loadtxt", "genfromtxt", "fromfile", "memmap", "gi_frame", "gi_code", "ag_frame",
+    "cr_frame", "f_globals", "f_locals", "f_builtins", "f_back", "f_code", "f_trace",
+    "tb_frame", "tb_next", "mro",
+})
+"""Rejected on any object: file I/O, pickling, raw memory and frame access."""
+
+_ALLOWED_NODES: tuple[type[ast.AST], ...] = (
+    ast.Module, ast.Expr, ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For, ast.While, ast.If,
+    ast.FunctionDef, ast.Return, ast.Pass, ast.Break, ast.Continue, ast.Try, ast.ExceptHandler,
+    ast.Raise, ast.Assert, ast.Delete, ast.ListComp, ast.SetComp, ast.DictComp,
+    ast.GeneratorExp, ast.comprehension, ast.BinOp, ast.UnaryOp, ast.BoolOp, ast.Compare,
+    ast.Call, ast.Attribute, ast.Subscript, ast.Slice, ast.Name, ast.Constant, ast.List,
+    ast.Tuple, ast.Dict, ast.Set, ast.IfExp, ast.Lambda, ast.JoinedStr, ast.FormattedValue,
+    ast.Starred, ast.NamedExpr, ast.keyword, ast.arguments, ast.arg, ast.Load, ast.Store,
+    ast.Del, ast.operator, ast.unaryop, ast.boolop, ast.cmpop,
+)
+
+_WHY_NOT = {
+    ast.Import: "import statements are not allowed; np, math, itertools and shapely are "
+                "already available",
+    ast.ImportFrom: "import statements are not allowed; np, math, itertools and shapely are "
+                    "already available",
+    ast.ClassDef: "class definitions are not allowed; use functions and dicts",
+    ast.Global: "global statements are not allowed; return values instead",
+    ast.Nonlocal: "nonlocal statements are not allowed; return values instead",
+    ast.With: "with statements are not allowed",
+    ast.Yield: "generators (yield) are not allowed",
+    ast.YieldFrom: "generators (yield) are not allowed",
+}
+
+# Methods whose result can be far larger than their inputs; loads of these attributes are routed
+# through a checker.
+_GROWING_METHODS = frozenset({"repeat", "resize", "ljust", "rjust", "center", "zfill",
+                              "expandtabs", "replace", "join"})
+
+
+# ------------------------------------------------------------------------------------------------
+# 1. static check
+# ------------------------------------------------------------------------------------------------
+def _bound_names(tree: ast.AST) -> set[str]:
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
+            names.add(node.id)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+        elif isinstance(node, (ast.FunctionDef, ast.ExceptHandler)) and node.name:
+            names.add(node.name)
+    return names
+
+
+def _check_node(node: ast.AST, line: int | None, bound: set[str], code: str) -> None:
+    line = getattr(node, "lineno", None) or line
+
+    def reject(message: str) -> None:
+        raise PlanError(f"SandboxViolation: {message}", line=line, code=code)
+
+    if not isinstance(node, _ALLOWED_NODES):
+        kind = type(node)
+        reject(_WHY_NOT.get(kind, f"{kind.__name__} is not allowed in plan code"))
+    identifiers: list[str] = []
+    if isinstance(node, ast.Name):
+        identifiers.append(node.id)
+        if node.id in FORBIDDEN_NAMES and node.id not in bound:
+            reject(f"the name '{node.id}' is not available")
+    elif isinstance(node, ast.Attribute):
+        if node.attr.startswith("_"):
+            reject(f"private attribute '.{node.attr}' is not allowed")
+        if node.attr in FORBIDDEN_ATTRIBUTES:
+            reject(f"attribute '.{node.attr}' is not allowed")
+    elif isinstance(node, ast.keyword) and node.arg is not None:
+        identifiers.append(node.arg)
+    elif isinstance(node, ast.arg):
+        identifiers.append(node.arg)
+    elif isinstance(node, (ast.FunctionDef, ast.ExceptHandler)) and node.name:
+        identifiers.append(node.name)
+    elif isinstance(node, ast.Try) and node.finalbody:
+        reject("try/finally is not allowed; use try/except")
+    for name in identifiers:
+        if name.startswith("__"):
+            reject(f"the name '{name}' is not allowed (names may not start with '__')")
+    for child in ast.iter_child_nodes(node):
+        _check_node(child, line, bound, code)
+
+
+def check_code(code: str) -> ast.Module:
+    """Parse and allow-list-check ``code``; the AST, or PlanError naming the offending line."""
+    if not isinstance(code, str):
+        raise PlanError(f"TypeError: plan code must be str, not {type(code).__name__}")
+    try:
+        tree = ast.parse(code, mode="exec")
+    except SyntaxError as exc:
+        raise PlanError(f"SyntaxError: {exc.msg}", line=exc.lineno, code=code) from None
+    except (ValueError, RecursionError, MemoryError) as exc:
+        raise PlanError(f"SyntaxError: {exc}", code=code) from None
+    try:
+        _check_node(tree, None, _bound_names(tree), code)
+    except RecursionError:
+        raise PlanError("SandboxViolation: code is nested too deeply", code=code) from None
+    return tree
+
+
+# ------------------------------------------------------------------------------------------------
+# 2. rewrite
+# ------------------------------------------------------------------------------------------------
+_BINOP_GUARDS = {ast.Mult: "__cap_mul", ast.Pow: "__cap_pow", ast.LShift: "__cap_lshift",
+                 ast.Add: "__cap_add"}
+
+
+def _helper_call(name: str, args: list[ast.expr], like: ast.AST) -> ast.Call:
+    call = ast.Call(func=ast.Name(id=name, ctx=ast.Load()), args=args, keywords=[])
+    return ast.copy_location(call, like)
+
+
+def _helper_statement(name: str, like: ast.AST) -> ast.Expr:
+    return ast.copy_location(ast.Expr(_helper_call(name, [], like)), like)
+
+
+class _Rewriter(ast.NodeTransformer):
+    """Routes resource-hungry operations of checked code through the session's guards."""
+
+    def visit_BinOp(self, node: ast.BinOp) -> ast.AST:
+        self.generic_visit(node)
+        guard = _BINOP_GUARDS.get(type(node.op))
+        return _helper_call(guard, [node.left, node.right], node) if guard else node
+
+    def visit_AugAssign(self, node: ast.AugAssign) -> ast.AST:
+        # Re-reading the target is only safe when that has no side effects (no calls in it).
+        pure = not any(isinstance(n, ast.Call) for n in ast.walk(node.target))
+        self.generic_visit(node)
+        guard = _BINOP_GUARDS.get(type(node.op))
+        if guard and pure:
+            current = copy.deepcopy(node.target)
+            current.ctx = ast.Load()  # type: ignore[attr-defined]
+            # In place (keeps list/ndarray identity): x op= check(x, y) returns y unchanged.
+            node.value = _helper_call(guard + "_check", [current, node.value], node)
+        return node
+
+    def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
+        self.generic_visit(node)
+        if isinstance(node.ctx, ast.Load) and node.attr in _GROWING_METHODS:
+            return _helper_call("__cap_attr", [node.value, ast.Constant(node.attr)], node)
+        return node
+
+    def visit_While(self, node: ast.While) -> ast.AST:
+        self.generic_visit(node)
+        # ``while True: pass`` emits no per-iteration line events: tick explicitly.
+        node.body.insert(0, _helper_statement("__cap_tick", node))
+        return node
+
+    def visit_ExceptHandler(self, node: ast.ExceptHandler) -> ast.AST:
+        self.generic_visit(node)
+        if node.type is None:  # bare except: would catch our aborts
+            node.type = ast.copy_location(ast.Name(id="__cap_Exception", ctx=ast.Load()), node)
+        # A tracer that raised (e.g. RecursionError at the recursion limit) is switched off by
+        # CPython; re-arm it whenever the code swallows an exception.
+        node.body.insert(0, _helper_statement("__cap_rearm", node))
+        return node

@@ -1,0 +1,288 @@
+"""Layer 3 of the sandbox: read-only library facades, allocation guards and curated builtins.
+
+Plan code never sees a real module: ``np``, ``math``, ``itertools`` and ``shapely`` are
+:class:`_Facade` namespaces of vetted functions, numpy constructors and ``math`` functions with
+huge C loops are size-checked before they run, infinite iterators are bounded, and builtins are
+a fresh curated dict per run so tampering cannot leak between runs.  The builders take the run's
+session (:class:`~capmj.agents.sandbox.runtime._Session`) as a parameter, so this module does
+not import the runtime and there is no import cycle.
+"""
+
+from __future__ import annotations
+
+import builtins as _builtins_module
+import functools
+import itertools as _itertools
+import math as _math
+import operator
+import sys
+import types
+from collections.abc import Callable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as _np
+
+if TYPE_CHECKING:
+    from capmj.agents.sandbox.runtime import _Session
+
+_MAX_PRINT_CHARS = 1_000_000
+
+_SAFE_BUILTINS = (
+    "abs", "all", "any", "bool", "chr", "dict", "divmod", "enumerate", "filter", "float",
+    "frozenset", "int", "isinstance", "len", "list", "map", "max", "min", "next", "ord",
+    "repr", "reversed", "round", "set", "slice", "sorted", "str", "sum", "tuple", "zip",
+    "ArithmeticError", "AssertionError", "AttributeError", "Exception", "IndexError",
+    "KeyError", "LookupError", "NotImplementedError", "OverflowError", "RecursionError",
+    "RuntimeError", "StopIteration", "TypeError", "ValueError", "ZeroDivisionError",
+)
+
+# Copy only name and doc onto wrappers: ``functools.wraps`` would also copy a wrapped type's
+# ``__dict__`` (descriptors such as ``chain.from_iterable``) into the wrapper function.
+_wraps = functools.partial(functools.wraps, assigned=("__name__", "__qualname__", "__doc__"),
+                           updated=())
+
+
+# ------------------------------------------------------------------------------------------------
+# 3. facades
+# ------------------------------------------------------------------------------------------------
+class _Facade:
+    """A read-only namespace exposing only ``members``; stands in for a module."""
+
+    __slots__ = ("_name", "_members")
+
+    def __init__(self, name: str, members: Mapping[str, object]) -> None:
+        object.__setattr__(self, "_name", name)
+        object.__setattr__(self, "_members", types.MappingProxyType(dict(members)))
+
+    def __getattr__(self, attr: str) -> object:
+        try:
+            return self._members[attr]
+        except KeyError:
+            message = f"'{self._name}' has no attribute '{attr}' in the sandbox"
+            raise AttributeError(message) from None
+
+    def __setattr__(self, attr: str, value: object) -> None:
+        raise AttributeError(f"'{self._name}' is read-only in the sandbox")
+
+    def __delattr__(self, attr: str) -> None:
+        raise AttributeError(f"'{self._name}' is read-only in the sandbox")
+
+    def __dir__(self) -> list[str]:
+        return sorted(self._members)
+
+    def __repr__(self) -> str:
+        return f"<sandbox module {self._name}>"
+
+
+class _TypeCheck:
+    """For ``isinstance(x, np.ndarray)``; not callable, as ``np.ndarray(shape)`` allocates."""
+
+    __slots__ = ("_real", "_name")
+
+    def __init__(self, real: type, name: str) -> None:
+        self._real, self._name = real, name
+
+    def __instancecheck__(self, obj: object) -> bool:
+        return isinstance(obj, self._real)
+
+    def __call__(self, *args: object, **kwargs: object) -> None:
+        raise TypeError(f"{self._name} cannot be constructed in the sandbox; use np.array")
+
+    def __repr__(self) -> str:
+        return f"<sandbox type {self._name}>"
+
+
+def _n_elements(shape: object) -> int:
+    """Element count of a numpy ``shape`` argument; 0 when malformed (numpy then complains)."""
+    try:
+        return max(operator.index(shape), 0)  # type: ignore[arg-type]
+    except TypeError:
+        pass
+    if not isinstance(shape, (tuple, list)):
+        return 0
+    n = 1
+    for dim in shape:
+        try:
+            n *= max(operator.index(dim), 0)
+        except TypeError:
+            return 0
+    return n
+
+
+def _arange_len(*args: Any, **kwargs: Any) -> int:
+    values = dict(zip(("start", "stop", "step"), args if len(args) != 1 else (0, args[0])))
+    values.update({k: kwargs[k] for k in ("start", "stop", "step") if k in kwargs})
+    start, stop, step = values.get("start", 0), values.get("stop"), values.get("step", 1)
+    if stop is None:
+        start, stop = 0, start
+    span = (float(stop) - float(start)) / float(step)
+    return int(_math.ceil(span)) if _math.isfinite(span) else sys.maxsize
+
+
+def _repeat_len(a: Any, repeats: Any, *args: Any, **kwargs: Any) -> int:
+    return int(_np.size(a)) * (int(_np.max(repeats)) if _np.size(repeats) else 0)
+
+
+def _like_len(a: Any, *args: Any, shape: Any = None, **kwargs: Any) -> int:
+    return _n_elements(shape) if shape is not None else int(_np.size(a))
+
+
+_BinaryOp = Callable[[Any, Any], Any]
+
+
+def _checked_op(check: _BinaryOp, op: _BinaryOp) -> _BinaryOp:
+    def apply(a: Any, b: Any) -> Any:
+        return op(a, check(a, b))
+
+    return apply
+
+
+def _growth(obj: Any, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> int:
+    """Elements ``obj.name(*args, **kwargs)`` would produce (arrays and strings only)."""
+    if isinstance(obj, _np.ndarray):
+        if name == "repeat":
+            return _repeat_len(obj, *args, **kwargs)
+        if name == "resize":
+            return _n_elements(args[0] if len(args) == 1 else args)
+        return 0
+    if name == "expandtabs":
+        return len(obj) * max(operator.index(args[0] if args else kwargs.get("tabsize", 8)), 1)
+    if name == "replace":
+        old, new = args[0], args[1]
+        count = args[2] if len(args) > 2 else kwargs.get("count", -1)
+        hits = obj.count(old) if old else len(obj) + 1
+        hits = hits if count < 0 else min(hits, count)
+        return len(obj) + hits * max(len(new) - len(old), 0)
+    if name in ("ljust", "rjust", "center", "zfill"):
+        return operator.index(args[0] if args else kwargs.get("width", 0))
+    return 0
+
+
+_NP_ALLOCATORS: dict[str, Callable[..., int]] = {
+    "zeros": lambda shape, *a, **k: _n_elements(shape),
+    "ones": lambda shape, *a, **k: _n_elements(shape),
+    "empty": lambda shape, *a, **k: _n_elements(shape),
+    "full": lambda shape, *a, **k: _n_elements(shape),
+    "eye": lambda N, M=None, *a, **k: operator.index(N) * operator.index(N if M is None else M),
+    "identity": lambda n, *a, **k: operator.index(n) ** 2,
+    "arange": _arange_len,
+    "linspace": lambda start, stop, num=50, *a, **k: operator.index(num),
+    "tile": lambda A, reps, **k: int(_np.size(A)) * _n_elements(reps),
+    "repeat": _repeat_len,
+    "zeros_like": _like_len,
+    "ones_like": _like_len,
+    "full_like": _like_len,
+}
+_NP_PLAIN = (
+    "array", "asarray", "mean", "median", "std", "var", "sum", "prod", "min", "max", "argmin",
+    "argmax", "argsort", "sort", "abs", "absolute", "sqrt", "square", "exp", "log", "sin", "cos",
+    "tan", "arctan", "arctan2", "arcsin", "arccos", "deg2rad", "rad2deg", "radians", "degrees",
+    "clip", "round", "floor", "ceil", "sign", "mod", "concatenate", "stack", "vstack", "hstack",
+    "column_stack", "where", "dot", "cross", "isclose", "allclose", "all", "any", "unique",
+    "diff", "cumsum", "maximum", "minimum", "hypot", "reshape", "transpose", "expand_dims",
+    "squeeze", "flip", "isnan", "isfinite", "nonzero", "argwhere", "count_nonzero", "interp",
+    "float32", "float64", "int32", "int64", "bool_", "pi", "inf", "nan", "e", "newaxis",
+)
+_MATH_INT_CAPS = {"factorial": 20_000, "comb": 100_000, "perm": 100_000}
+_ITERTOOLS = (
+    "permutations", "combinations", "combinations_with_replacement", "product", "islice",
+    "cycle", "count", "repeat", "accumulate", "groupby", "zip_longest", "pairwise", "starmap",
+    "takewhile", "dropwhile", "compress", "filterfalse",
+)
+
+
+def _guarded(session: _Session, fn: Callable[..., Any], size: Callable[..., int],
+             label: str) -> Callable[..., Any]:
+    @_wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            n = size(*args, **kwargs)
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError):
+            n = 0  # malformed arguments: the real function raises its own error
+        session.limit(n, label)
+        return fn(*args, **kwargs)
+
+    return wrapper
+
+
+def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
+                label: str) -> Callable[..., Any]:
+    """``fn`` refusing integer arguments above ``cap`` (its C loop could run for hours)."""
+    @_wraps(fn)
+    def wrapper(*args: Any) -> Any:
+        if any(isinstance(a, int) and a > cap for a in args):
+            session.abort(f"{label} arguments are limited to {cap}")
+        return fn(*args)
+
+    return wrapper
+
+
+def _facades(session: _Session) -> dict[str, object]:
+    """Fresh facades for one run (they close over the run's budget)."""
+    import shapely.affinity
+    import shapely.geometry
+
+    np_members: dict[str, object] = {name: getattr(_np, name) for name in _NP_PLAIN}
+    for name, size in _NP_ALLOCATORS.items():
+        np_members[name] = _guarded(session, getattr(_np, name), size, f"np.{name}()")
+    np_members["ndarray"] = _TypeCheck(_np.ndarray, "np.ndarray")
+    np_members["linalg"] = _Facade("np.linalg", {n: getattr(_np.linalg, n)
+                                                for n in ("norm", "inv", "det", "solve")})
+
+    geometry = {n: getattr(shapely.geometry, n)
+                for n in ("Point", "Polygon", "LineString", "MultiPoint", "MultiPolygon", "box")}
+    affinity = {n: getattr(shapely.affinity, n) for n in ("rotate", "translate", "scale")}
+    shapely_facade = _Facade("shapely", {
+        "geometry": _Facade("shapely.geometry", geometry),
+        "affinity": _Facade("shapely.affinity", affinity),
+        **geometry,
+    })
+
+    math_members: dict[str, object] = {n: getattr(_math, n) for n in dir(_math)
+                                       if not n.startswith("_")}
+    for name, cap in _MATH_INT_CAPS.items():
+        math_members[name] = _int_capped(session, getattr(_math, name), cap, f"math.{name}()")
+
+    def iterator(name: str) -> Callable[..., Iterator[Any]]:
+        real = getattr(_itertools, name)
+
+        @_wraps(real)
+        def make(*args: Any, **kwargs: Any) -> Iterator[Any]:
+            return session.bounded(real(*args, **kwargs), f"itertools.{name}()")
+
+        return make
+
+    iter_members: dict[str, object] = {name: iterator(name) for name in _ITERTOOLS}
+    chain = iterator("chain")
+    chain.from_iterable = lambda it: session.bounded(  # type: ignore[attr-defined]
+        _itertools.chain.from_iterable(it), "itertools.chain()")
+    iter_members["chain"] = chain
+
+    return {
+        "np": _Facade("np", np_members),
+        "math": _Facade("math", math_members),
+        "itertools": _Facade("itertools", iter_members),
+        "shapely": shapely_facade,
+        **geometry,
+        **affinity,
+    }
+
+
+def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
+    """A fresh curated builtins dict: tampering in one run cannot reach the next."""
+    table: dict[str, object] = {n: getattr(_builtins_module, n) for n in _SAFE_BUILTINS}
+    printed = [0]
+
+    def captured_print(*args: object, sep: str | None = " ", end: str | None = "\n",
+                       file: object = None, flush: bool = False) -> None:
+        text = (" " if sep is None else str(sep)).join(str(a) for a in args)
+        if end not in (None, "\n"):
+            text += str(end)
+        if output is None or printed[0] > _MAX_PRINT_CHARS:
+            return
+        printed[0] += len(text)
+        output.append(text if printed[0] <= _MAX_PRINT_CHARS else "[print output truncated]")
+
+    table["print"] = captured_print
+    table["range"] = session.capped_range
+    return table
