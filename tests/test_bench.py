@@ -209,7 +209,9 @@ def test_worker_crash_is_recorded_and_the_run_goes_on(tmp_path):
     assert len(lines) == 4 and set(by.values()) == {1}
     for r in lines:
         if r["task"] == "test-crash-task":
-            assert not r["success"] and r["error"].startswith("WorkerCrash:") and "SIGKILL" in r["error"], r
+            assert not r["success"] and r["error"].startswith("WorkerCrash:") and "died again" in r["error"], r
+            # the exit code is named when the pool still knows the dead process (not guaranteed)
+            assert "killed by" not in r["error"] or "SIGKILL" in r["error"], r
         else:
             assert r["success"] and r["error"] is None, r
 

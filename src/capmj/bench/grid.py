@@ -153,11 +153,16 @@ class Grid:
         return ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=init_worker,
                                    initargs=(self.agent, self.registered), max_tasks_per_child=self.recycle_after)
 
+    def _track_workers(self) -> None:
+        """Remember the pool's worker processes: a broken pool may forget them before we ask."""
+        self._workers.update(getattr(self._pool, "_processes", None) or {})
+
     def _exit_codes(self) -> list[int]:
-        procs = getattr(self._pool, "_processes", None) or {}
+        self._track_workers()
         codes = []
-        for p in list(procs.values()):
+        for p in list(self._workers.values()):
             try:
+                p.join(timeout=1.0)  # a dying worker may need a moment; joining reaps its exit code
                 code = p.exitcode
             except Exception:  # noqa: BLE001
                 code = None
@@ -166,6 +171,7 @@ class Grid:
         return codes
 
     def _kill_pool(self) -> None:
+        self._workers = {}
         pool, self._pool = self._pool, None
         if pool is None:
             return
@@ -216,6 +222,7 @@ class Grid:
                 job = source.popleft()
                 try:
                     inflight[self._pool.submit(run_job, job)] = job
+                    self._track_workers()
                 except BrokenProcessPool:
                     source.appendleft(job)
                     broken = True
@@ -253,6 +260,7 @@ class Grid:
                 self._isolating = bool(suspects)
 
     _isolating = False
+    _workers: dict = {}
 
 
 def _describe_codes(codes: Sequence[int]) -> str:
