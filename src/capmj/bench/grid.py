@@ -146,6 +146,7 @@ class Grid:
         self.registered = pickle.dumps(list(registered)) if registered else None
         self.stats = GridStats()
         self._pool: ProcessPoolExecutor | None = None
+        self._workers: dict[int, Any] = {}  # per instance: a class-level dict would leak across grids
 
     # .................................................................. pool management
     def _new_pool(self) -> ProcessPoolExecutor:
@@ -260,7 +261,6 @@ class Grid:
                 self._isolating = bool(suspects)
 
     _isolating = False
-    _workers: dict = {}
 
 
 def _describe_codes(codes: Sequence[int]) -> str:

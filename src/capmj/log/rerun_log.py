@@ -174,10 +174,16 @@ class RerunRecorder:
             self._log_objects_from_specs(objects)
 
     # ------------------------------------------------------------------ time
-    def _map(self, t: float | None) -> float:
+    def _map(self, t: float | None, *, frame: bool = False) -> float:
+        """Episode time of a simulated time.  Only frames (which come from stepping the world) can
+        reveal a reset; other events are placed at their time or, if that lies in the past of the
+        log (a stale time, or a text logged right after a reset), at the latest logged time."""
         if t is None:
             return self._now
         t = float(t)
+        if not frame:
+            self._now = max(t + self._offset, self._now)
+            return self._now
         if t < self._last_raw - 1e-9:  # the world was reset to its initial state (re-plan):
             self._offset += self._last_raw - t + _RESET_GAP_S  # continue the timeline after a small gap
         self._last_raw = t
@@ -286,7 +292,7 @@ class RerunRecorder:
 
     # ------------------------------------------------------------------ Recorder protocol
     def frame(self, time: float, poses: Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]) -> None:
-        t = self._map(time)
+        t = self._map(time, frame=True)
         label = self._prim + 1 if self._attached else self._prim
         self._frames.append((t, label, dict(poses)))
         if len(self._frames) >= _FLUSH_FRAMES:
