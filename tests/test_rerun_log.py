@@ -150,6 +150,7 @@ def test_recorder_without_world_keeps_time_monotonic_and_texts_under_text(tmp_pa
     for t in (0.0, 0.05, 0.10):
         rec.frame(t, {"obj1": ((0.5, 0.0, t), pose[1])})
     rec.text("llm/planner/prompt", "objects = [...]")
+    rec.text("llm/planner/stale", "a time in the past must not look like a reset", time=0.02)
     for t in (0.0, 0.05):  # a reset to the initial state (re-plan): raw time goes back
         rec.frame(t, {"obj1": ((0.6, 0.0, t), pose[1])})
     rec.primitive(1, 0.05, {"ok": False, "status": "no_grip", "obj_id": None, "pick": (0.5, 0, 0.02),
@@ -161,7 +162,8 @@ def test_recorder_without_world_keeps_time_monotonic_and_texts_under_text(tmp_pa
     assert log.summary["primitive_log"][0]["status"] == "no_grip"
     ent = _read(p)
     times = [t for _, rb in ent["/world/objects/obj1"] for t in _seconds(rb)]
-    assert len(times) == 5 and times == sorted(times) and len(set(times)) == 5
+    # the reset continues the timeline one frame period (0.05 s) after the last frame
+    assert times == pytest.approx([0.0, 0.05, 0.10, 0.15, 0.20])
 
 
 def test_camera_images_logged_and_exported(tmp_path):
