@@ -150,7 +150,24 @@ class BenchTask:
         return f"<task {self.name}>"
 
 
+class SelectedStackTask(BenchTask):
+    """Goals and verdict shared by tasks that stack a selection of blocks in one zone (D, E).
+
+    ``scene.info`` holds ``zone`` and ``selected``: the selected blocks must form one stack in
+    the zone, and no other block may be in it.
+    """
+
+    def oracle_goals(self, scene: Scene) -> list[OracleGoal]:
+        return stack_goals(scene, scene.info["zone"], scene.info["selected"])
+
+    def evaluate(self, scene: Scene, state: SceneState) -> Verdict:
+        sel, zone = scene.info["selected"], scene.info["zone"]
+        rep = check_stack(state, sel, zone, what="selected blocks")
+        clean, extra = exclusive_zone(state, zone, sel)
+        return verdict(len(rep.tower) + clean, len(sel) + 1, rep.ok and clean, rep.diagnostics + extra)
+
+
 __all__ = [
-    "BENCHMARK", "BenchTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
+    "BENCHMARK", "BenchTask", "SelectedStackTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
     "solved_state", "stack_goals", "stack_targets", "start_positions", "verdict",
 ]

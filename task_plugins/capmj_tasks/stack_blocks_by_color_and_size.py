@@ -4,18 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from capmj.sim.state import SceneState
-from capmj.tasks.protocol import OracleGoal, Scene, Verdict
+from capmj.tasks.protocol import Scene
 from capmj.tasks.spawn import COOL_COLORS, WARM_COLORS, Spawner, pick_color
 
-from capmj_tasks.common import BenchTask, check_stack, exclusive_zone, shuffled, stack_goals, verdict
+from capmj_tasks.common import SelectedStackTask, shuffled
 
 SIZE_WORD = {"big": "bigger", "small": "smaller"}
 MAX_SELECTED = {"big": 4, "small": 5}
 """Stack height cap: 4 big (0.24 m) or 5 small (0.20 m) blocks stay inside z ≤ 0.3."""
 
 
-class StackBlocksByColorAndSize(BenchTask):
+class StackBlocksByColorAndSize(SelectedStackTask):
     """Stack only the blocks of one size and one colour temperature in the zone.
 
     Task Description:
@@ -63,15 +62,6 @@ class StackBlocksByColorAndSize(BenchTask):
             {"zone": zone.obj_id, "size": size, "temperature": temp, "selected": selected,
              "blocks": [b.obj_id for b in blocks]},
         )
-
-    def oracle_goals(self, scene: Scene) -> list[OracleGoal]:
-        return stack_goals(scene, scene.info["zone"], scene.info["selected"])
-
-    def evaluate(self, scene: Scene, state: SceneState) -> Verdict:
-        sel, zone = scene.info["selected"], scene.info["zone"]
-        rep = check_stack(state, sel, zone, what="selected blocks")
-        clean, extra = exclusive_zone(state, zone, sel)
-        return verdict(len(rep.tower) + clean, len(sel) + 1, rep.ok and clean, rep.diagnostics + extra)
 
 
 TASK = StackBlocksByColorAndSize()

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from capmj.sim.state import SceneState
-from capmj.tasks.protocol import OracleGoal, Resample, Scene, Verdict
+from capmj.tasks.protocol import Resample, Scene
 from capmj.tasks.spawn import Spawner, pick_color, pick_colors
 
-from capmj_tasks.common import BenchTask, check_stack, exclusive_zone, stack_goals, start_positions, verdict
+from capmj_tasks.common import SelectedStackTask, start_positions
 
 THRESHOLD = 0.05
 MARGIN = 0.01
@@ -25,7 +24,7 @@ def signed_distance(direction: str, pos, ref_pos) -> float:
     return sign * (float(pos[axis]) - float(ref_pos[axis]))
 
 
-class StackBlocksByRelativePositionAndColor(BenchTask):
+class StackBlocksByRelativePositionAndColor(SelectedStackTask):
     """Stack the blocks lying more than 0.05 m to one side of a reference block.
 
     Task Description:
@@ -71,15 +70,6 @@ class StackBlocksByRelativePositionAndColor(BenchTask):
             "zone": zone.obj_id, "reference": ref.obj_id, "direction": direction, "threshold": THRESHOLD,
             "selected": selected, "blocks": [b.obj_id for b in blocks], "start_positions": start_positions(blocks),
         })
-
-    def oracle_goals(self, scene: Scene) -> list[OracleGoal]:
-        return stack_goals(scene, scene.info["zone"], scene.info["selected"])
-
-    def evaluate(self, scene: Scene, state: SceneState) -> Verdict:
-        sel, zone = scene.info["selected"], scene.info["zone"]
-        rep = check_stack(state, sel, zone, what="selected blocks")
-        clean, extra = exclusive_zone(state, zone, sel)
-        return verdict(len(rep.tower) + clean, len(sel) + 1, rep.ok and clean, rep.diagnostics + extra)
 
 
 TASK = StackBlocksByRelativePositionAndColor()

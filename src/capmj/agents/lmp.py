@@ -36,7 +36,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from capmj.agents.sandbox import FORBIDDEN_NAMES, SandboxBudget, extract_code, run_code
+from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES, SandboxBudget, extract_code, run_code
 from capmj.errors import ConfigError, LLMError, PlanError
 from capmj.record import NullRecorder, Recorder
 
@@ -66,18 +66,8 @@ META = "#@"
 ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order"})
 """API functions that move the robot: only the planner's code may call them, never a helper LMP."""
 
-SANDBOX_GLOBALS = frozenset({
-    # what run_code provides besides env: facades, shapely shortcuts, curated builtins
-    "np", "math", "itertools", "shapely", "Point", "Polygon", "LineString", "MultiPoint",
-    "MultiPolygon", "box", "rotate", "translate", "scale", "print", "range",
-    "abs", "all", "any", "bool", "chr", "dict", "divmod", "enumerate", "filter", "float",
-    "frozenset", "int", "isinstance", "len", "list", "map", "max", "min", "next", "ord",
-    "repr", "reversed", "round", "set", "slice", "sorted", "str", "sum", "tuple", "zip",
-    "ArithmeticError", "AssertionError", "AttributeError", "Exception", "IndexError",
-    "KeyError", "LookupError", "NotImplementedError", "OverflowError", "RecursionError",
-    "RuntimeError", "StopIteration", "TypeError", "ValueError", "ZeroDivisionError",
-    "True", "False", "None",
-})
+SANDBOX_GLOBALS = PROVIDED_NAMES
+"""What run_code provides besides env (facades, shapely shortcuts, curated builtins)."""
 
 # Modules the prompts "import" in their header: LLMs often repeat such lines; they are dropped
 # when every name they bind is already available.  Any other import reaches the sandbox, which
@@ -463,26 +453,32 @@ class LMPSession:
         return "".join(out)
 
     # -- the LMPs ----------------------------------------------------------------------------
-    def run_lmp(self, lmp: str, question: str, return_var: str, *, query: str | None = None) -> Any:
-        """Generic helper LMP: prompt -> completion -> code -> sandbox -> ``return_var``.
+    def _ask_and_run(self, call: Any, lmp: str, question: str) -> dict[str, Any]:
+        """Prompt -> completion -> code -> sandbox; the code's final namespace.
 
-        The question's ``objects = [...]`` line is also bound as ``objects`` for the code.
+        The question's ``objects = [...]`` line is also bound as ``objects`` for the code.  A
+        rejected or failing program is recorded on the call and re-raised as ``PlanError``.
         """
-        call = self.next_call(lmp, query if query is not None else question)
         text = self.ask(call, self.messages(self.prompt(lmp).render(question)))
         try:
             code = extract_code(text)
             env = self.helper_env(question)
             code = self.prepare(code, env, parent=call)
             self.record(call, "code", code)
-            ns = run_code(code, env, budget=self.lmp_budget,
-                          filename=f"<{lmp} {self.attempt}.{call.n}>")
-            if return_var not in ns:
-                raise PlanError(f"NameError: {lmp} code did not set '{return_var}'")
-            value = ns[return_var]
+            return run_code(code, env, budget=self.lmp_budget, filename=f"<{lmp} {self.attempt}.{call.n}>")
         except PlanError as exc:
             self.record(call, "error", f"{type(exc).__name__}: {exc}")
             raise
+
+    def run_lmp(self, lmp: str, question: str, return_var: str, *, query: str | None = None) -> Any:
+        """Generic helper LMP: the value of ``return_var`` after running the LMP's code."""
+        call = self.next_call(lmp, query if query is not None else question)
+        ns = self._ask_and_run(call, lmp, question)
+        if return_var not in ns:
+            exc = PlanError(f"NameError: {lmp} code did not set '{return_var}'")
+            self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            raise exc
+        value = ns[return_var]
         self.record(call, "result", _short_repr(value))
         return value
 
@@ -503,16 +499,9 @@ class LMPSession:
         ctx = context if isinstance(context, str) and context.strip() else self.objects_text()
         question = f"{ctx.strip()}\n# goal: {_sentence(goal)}"
         call = self.next_call("parse_completion", goal)
-        text = self.ask(call, self.messages(self.prompt("parse_completion").render(question)))
         try:
-            code = extract_code(text)
-            env = self.helper_env(question)
-            code = self.prepare(code, env, parent=call)
-            self.record(call, "code", code)
-            ns = run_code(code, env, budget=self.lmp_budget,
-                          filename=f"<parse_completion {self.attempt}.{call.n}>")
+            ns = self._ask_and_run(call, "parse_completion", question)
         except PlanError as exc:
-            self.record(call, "error", f"{type(exc).__name__}: {exc}")
             return None, f"the checking code failed: {exc}"
         judge = ns.get("judge")
         reason = ns.get("reason")

@@ -230,8 +230,8 @@ def _facades(session: _Session) -> dict[str, object]:
                                                 for n in ("norm", "inv", "det", "solve")})
 
     geometry = {n: getattr(shapely.geometry, n)
-                for n in ("Point", "Polygon", "LineString", "MultiPoint", "MultiPolygon", "box")}
-    affinity = {n: getattr(shapely.affinity, n) for n in ("rotate", "translate", "scale")}
+                for n in _GEOMETRY_NAMES}
+    affinity = {n: getattr(shapely.affinity, n) for n in _AFFINITY_NAMES}
     shapely_facade = _Facade("shapely", {
         "geometry": _Facade("shapely.geometry", geometry),
         "affinity": _Facade("shapely.affinity", affinity),
@@ -266,6 +266,17 @@ def _facades(session: _Session) -> dict[str, object]:
         **geometry,
         **affinity,
     }
+
+
+_GEOMETRY_NAMES = ("Point", "Polygon", "LineString", "MultiPoint", "MultiPolygon", "box")
+_AFFINITY_NAMES = ("rotate", "translate", "scale")
+
+PROVIDED_NAMES: frozenset[str] = frozenset(
+    ("np", "math", "itertools", "shapely", "print", "range", "True", "False", "None")
+    + _GEOMETRY_NAMES + _AFFINITY_NAMES + _SAFE_BUILTINS
+)
+"""Every global name ``run_code`` provides besides the caller's ``env`` (facades, shapely
+shortcuts, curated builtins): code using only these and ``env`` needs nothing synthesised."""
 
 
 def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
