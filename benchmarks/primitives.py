@@ -23,7 +23,6 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from capmj.sim.objects import ObjectSpec  # noqa: E402
 from capmj.sim.primitives import Primitives  # noqa: E402
 from capmj.sim.world import World  # noqa: E402
 from capmj.tasks import predicates as P  # noqa: E402

@@ -16,32 +16,14 @@ import json
 import sys
 from concurrent.futures import ProcessPoolExecutor
 
-
-def _tasks(selector: str) -> list[str]:
-    try:
-        from capmj.tasks.registry import resolve
-    except ImportError:  # pragma: no cover - registry not installed: the built-in modules
-        import capmj_tasks  # noqa: F401
-
-        return [t.strip() for t in selector.split(",")]
-    return resolve(selector)
-
-
-def _get_task(name: str):
-    try:
-        from capmj.tasks.registry import get_task
-    except ImportError:  # pragma: no cover
-        import importlib
-
-        return importlib.import_module("capmj_tasks." + name.replace("-", "_")).TASK
-    return get_task(name)
+from capmj.tasks.registry import get_task, resolve
 
 
 def run_task(name: str, seeds: list[int]) -> tuple[dict, list[dict]]:
     from capmj.agents.reference import ReferenceAgent
     from capmj.runner import run_episode
 
-    task, agent = _get_task(name), ReferenceAgent()
+    task, agent = get_task(name), ReferenceAgent()
     results = [run_episode(task, s, agent) for s in seeds]
     n = len(results)
     stats = {
@@ -63,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=1, help="processes (results do not depend on it)")
     args = ap.parse_args(argv)
     seeds = [10001 + 2 * k for k in range(args.seeds)]
-    names = _tasks(args.tasks)
+    names = resolve(args.tasks)
     per_task, failures = {}, []
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:

@@ -33,7 +33,6 @@ import numpy as np
 
 from capmj.agents.base import EpisodeContext
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
-from capmj.sim.robot import CUP_RADIUS
 from capmj.tasks.protocol import episode_rng
 
 WORKSPACE = (0.25, -0.5, 0.75, 0.5)

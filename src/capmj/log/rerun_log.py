@@ -275,7 +275,6 @@ class RerunRecorder:
         """Use the live world: exact object shapes, robot links, and camera images if enabled."""
         from capmj.sim.palette import rgba
 
-        rr = self._rr
         self._world = world
         self._attached = True
         m = world.model
