@@ -98,11 +98,11 @@ def test_block_dropped_in_bowl_stays_in_bowl() -> None:
     p = Primitives(w)
     m = p.motion
     pos = np.array(w.pose(1).pos)
-    m.move_to(np.array([pos[0], pos[1], 0.2]), m.tool_yaw)
-    m.move_to(np.array([pos[0], pos[1], 0.0]), m.tool_yaw, speed=0.2, stop=lambda: w.suction.touching() is not None)
+    m.move_to(np.array([pos[0], pos[1], 0.2]), m.commanded_yaw())
+    m.move_to(np.array([pos[0], pos[1], 0.0]), m.commanded_yaw(), speed=0.2, stop=lambda: w.suction.touching() is not None)
     assert w.suction.grip() == 1
     # carry it 8 cm above the rim and let go off-centre: it must fall in and stay in
-    m.move_to(np.array([0.57, 0.16, 0.16]), m.tool_yaw)
+    m.move_to(np.array([0.57, 0.16, 0.16]), m.commanded_yaw())
     w.suction.release()
     w.settle(2000)
     state = w.state()
@@ -148,3 +148,18 @@ def test_world_evolves_identically_across_processes() -> None:
     runs = {subprocess.run([sys.executable, "-c", _PROCESS_SCRIPT], capture_output=True, text=True, check=True).stdout
             for _ in range(2)}
     assert len(runs) == 1 and len(next(iter(runs)).strip()) == 64
+
+
+def test_many_turning_placements_never_wind_the_wrist_into_its_limit() -> None:
+    """Each placement turns the block (and wrist) by ~40° the same way; 24 of them add up to
+    over two full turns, beyond wrist 3's ±2π range unless the primitive unwinds it."""
+    w = World([small(1, "red", 0.45, -0.15), small(2, "blue", 0.55, 0.15)])
+    p = Primitives(w)
+    spots = [np.array([0.45, -0.15]), np.array([0.55, 0.15])]
+    for k in range(24):
+        obj = 1 + k % 2
+        target = spots[(k // 2 + 1) % 2] if obj == 1 else spots[(k // 2) % 2]
+        target = target + np.array([0.0, 0.1 if k % 4 < 2 else -0.1])
+        res = p.pick_and_place(np.asarray(w.pose(obj).pos), target, w.pose(obj).yaw + np.radians(40))
+        assert res.ok, (k, res)
+        assert abs(w.arm_q()[5]) < 2 * np.pi - 0.5

@@ -75,8 +75,6 @@ class Motion:
         self.ik = SuctionIK(m, world.tip_site, world.arm_qpos, world.arm_dof)
         gain = m.actuator_gainprm[:6, 0]
         self._ff = -m.actuator_biasprm[:6, 2] / gain  # kv / kp per joint
-        rot = world.tip_pose()[1]
-        self.tool_yaw = float(np.arctan2(rot[1, 0], rot[0, 0]))
 
     # ------------------------------------------------------------------ segments
     def _profile(self, length: float, speed: float, accel: float) -> tuple[float, Callable[[float], float]]:
@@ -202,7 +200,6 @@ class Motion:
         plan = self.plan_line(start, np.asarray(pos, float), yaw0, yaw, speed or self.cfg.speed)
         if plan is None:
             return "unreachable", 0
-        self.tool_yaw = yaw
         stopped, steps = self.execute(plan, stop)
         if stopped:
             return "stopped", steps

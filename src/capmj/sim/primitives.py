@@ -47,6 +47,24 @@ class Primitives:
         tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
         return max(tops, default=0.0)
 
+    def _unwound_yaw(self, pos: np.ndarray) -> float:
+        """A tool yaw for reaching ``pos`` that keeps the last wrist joint near zero.
+
+        The cup is round, so any yaw picks equally well; but each placement turns the wrist by up
+        to 45°, and IK continuity would let those turns add up until wrist 3 hits its ±2π limit.
+        Among yaws a quarter turn apart, take the one whose IK has the smallest wrist-3 angle.
+        """
+        m = self.motion
+        base = m.commanded_yaw()
+        q_near = self.world.data.ctrl[:6].copy()
+        best, best_cost = base, (np.inf, 0)
+        for k in range(-4, 5):
+            yaw = base + k * _QUARTER
+            res = m.ik.solve(pos, yaw, q_near)
+            if res.q is not None and (abs(res.q[5]), abs(k)) < best_cost:
+                best, best_cost = yaw, (abs(res.q[5]), abs(k))
+        return best
+
     def _put_back(self, pick: np.ndarray, yaw: float) -> None:
         """After a failed carry, lower the held object where it was picked and let go.
 
@@ -87,12 +105,12 @@ class Primitives:
         if w.suction.held is not None:
             w.suction.release()
         transit = max(cfg.min_transit_z, self.highest_top() + cfg.clearance)
-        yaw = self.motion.tool_yaw
         # 1. up, over, and down onto the pick point
         tip = w.tip_pose()[0]
         if tip[2] < transit - 1e-3:
-            if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
+            if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
                 return result("unreachable", None, "cannot rise to transit height")
+        yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         surface = self.surface_z(pick[:2])
@@ -141,5 +159,4 @@ class Primitives:
         tip = w.tip_pose()[0]
         m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + 0.1)]), new_yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
-        self.motion.tool_yaw = _wrap(new_yaw, 2 * math.pi) if abs(new_yaw) > 2 * math.pi else new_yaw
         return result("ok", obj)
