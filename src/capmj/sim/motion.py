@@ -181,6 +181,24 @@ class Motion:
                 return True, steps
         return False, steps
 
+    def unwind_wrist(self) -> int:
+        """Turn wrist 3 by a full turn back towards zero when it is beyond ±π; returns steps.
+
+        The tool pose is unchanged (a full turn), but IK continuity keeps later solutions near
+        the current wrist angle, so without this the wrist would creep to its ±2π limit.
+        """
+        q = self.world.data.ctrl[:6].copy()
+        if abs(q[5]) <= np.pi:
+            return 0
+        goal = q.copy()
+        goal[5] -= np.sign(q[5]) * 2 * np.pi
+        duration = max(2 * np.pi / self.cfg.joint_speed, 2 * np.sqrt(2 * np.pi / self.cfg.joint_accel))
+        n = max(2, int(np.ceil(duration / self.cfg.ik_dt)))
+        s = np.linspace(0.0, 1.0, n + 1)
+        s = s * s * (3 - 2 * s)  # smoothstep: zero speed at both ends
+        qs = q + s[:, None] * (goal - q)
+        return self.execute(_Plan(qs, duration / n))[1]
+
     def commanded_yaw(self) -> float:
         """Tool yaw of the currently commanded joints (read from the arm, never remembered)."""
         self.ik.tip_position(self.world.data.ctrl[:6].copy())

@@ -110,6 +110,7 @@ class Primitives:
         if tip[2] < transit - 1e-3:
             if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
                 return result("unreachable", None, "cannot rise to transit height")
+        m.unwind_wrist()
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
