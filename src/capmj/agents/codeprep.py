@@ -1,0 +1,144 @@
+"""Static preparation of LLM-written code before it reaches the sandbox.
+
+Completions are not run as written: import lines that merely echo the prompt header are
+dropped, and calls of functions nobody defined are found so that ``parse_function`` can write
+them (see :class:`capmj.agents.lmp.LMPSession`).  All of that is pure AST work on source text,
+with no LLM or environment involved, so it lives here and can be tested on its own.  Everything
+is line-preserving where it matters: the sandbox reports errors by line of the submitted code.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import re
+
+from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES
+from capmj.errors import PlanError
+
+__all__ = [
+    "SANDBOX_GLOBALS",
+    "bound_names",
+    "function_defs",
+    "strip_benign_imports",
+    "undefined_calls",
+]
+
+SANDBOX_GLOBALS = PROVIDED_NAMES
+"""What run_code provides besides env (facades, shapely shortcuts, curated builtins)."""
+
+# Modules the prompts "import" in their header: LLMs often repeat such lines; they are dropped
+# when every name they bind is already available.  Any other import reaches the sandbox, which
+# rejects it (and ends the attempt with a recorded error).
+_BENIGN_MODULES = frozenset({"numpy", "math", "itertools", "shapely", "shapely.geometry",
+                             "shapely.affinity", "env_utils", "plan_utils", "utils"})
+
+
+def bound_names(tree: ast.AST) -> set[str]:
+    """Every name ``tree`` binds anywhere (assignments, arguments, defs, except/import names)."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            names.add(node.id)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.ExceptHandler) and node.name:
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                names.add((alias.asname or alias.name).split(".")[0])
+    return names
+
+
+def undefined_calls(code: str, known: set[str] | frozenset[str]) -> list[tuple[str, int, str]]:
+    """Functions ``code`` calls by a bare name that neither ``known`` nor the code itself binds.
+
+    Returns ``(name, line, statement source)`` for the first call site of each, in order of
+    appearance.  Unparseable code gives ``[]`` (the sandbox reports the syntax error).  Names the
+    sandbox forbids (``eval``, ``open``...) are never offered for synthesis.
+    """
+    try:
+        tree = ast.parse(code)
+    except (SyntaxError, ValueError):
+        return []
+    bound = bound_names(tree) | set(known) | SANDBOX_GLOBALS
+    lines = code.splitlines()
+    statements = [n for n in ast.walk(tree) if isinstance(n, ast.stmt)]
+    found: dict[str, tuple[str, int, str]] = {}
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)]
+    for call in sorted(calls, key=lambda c: (c.lineno, c.col_offset)):
+        name = call.func.id  # type: ignore[attr-defined]
+        if name in bound or name in found or name in FORBIDDEN_NAMES or name.startswith("_"):
+            continue
+        if hasattr(builtins, name):
+            continue  # a real builtin the sandbox withholds on purpose: let it fail there
+        # the innermost simple statement that contains the call, as the call site
+        site = call.lineno
+        end = getattr(call, "end_lineno", site) or site
+        for st in statements:
+            if isinstance(st, (ast.FunctionDef, ast.For, ast.While, ast.If, ast.Try)):
+                continue
+            if st.lineno <= call.lineno and (st.end_lineno or st.lineno) >= end:
+                site, end = st.lineno, st.end_lineno or st.lineno
+        snippet = "\n".join(ln.strip() for ln in lines[site - 1:end]).strip()
+        found[name] = (name, call.lineno, snippet)
+    return list(found.values())
+
+
+def strip_benign_imports(code: str, available: set[str] | frozenset[str]) -> tuple[str, list[str]]:
+    """Remove import lines that only re-import names the sandbox already provides.
+
+    ``import numpy as np`` or ``from env_utils import get_obj_pos`` are harmless echoes of the
+    prompt header; ``import os`` (or anything binding an unavailable name) is kept so that the
+    sandbox rejects it.  Returns (code, removed lines).
+    """
+    try:
+        tree = ast.parse(code)
+    except (SyntaxError, ValueError):
+        return code, []
+    have = set(available) | SANDBOX_GLOBALS
+    drop: list[tuple[int, int]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            ok = all(a.name in _BENIGN_MODULES and (a.asname or a.name).split(".")[0] in have
+                     for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            ok = (node.level == 0 and node.module in _BENIGN_MODULES
+                  and all(a.name != "*" and (a.asname or a.name) in have for a in node.names))
+        else:
+            continue
+        if ok:
+            drop.append((node.lineno, node.end_lineno or node.lineno))
+    if not drop:
+        return code, []
+    lines = code.splitlines()
+    removed: list[str] = []
+    for start, end in sorted(drop, reverse=True):
+        removed[:0] = lines[start - 1:end]
+        # keep line numbers stable: replace with 'pass' (imports may sit inside a block)
+        indent = re.match(r"\s*", lines[start - 1]).group(0)  # type: ignore[union-attr]
+        lines[start - 1:end] = [f"{indent}pass  # removed: {lines[start - 1].strip()}"] + [""] * (end - start)
+    return "\n".join(lines) + "\n", removed
+
+
+def function_defs(code: str, wanted: str) -> str:
+    """Only the top-level function definitions of ``code``; one of them must be ``wanted``."""
+    try:
+        tree = ast.parse(code)
+    except SyntaxError as exc:
+        raise PlanError(f"SyntaxError: {exc.msg} (in the function written for {wanted})",
+                        line=exc.lineno, code=code) from None
+    lines = code.splitlines()
+    parts: list[str] = []
+    names: list[str] = []
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            start = min([d.lineno for d in node.decorator_list] + [node.lineno])
+            parts.append("\n".join(lines[start - 1:node.end_lineno]))
+            names.append(node.name)
+    if wanted not in names:
+        raise PlanError(f"NameError: parse_function did not define '{wanted}' "
+                        f"(defined: {names or 'nothing'})")
+    return "\n\n".join(parts) + "\n\n"

@@ -1,0 +1,170 @@
+"""Prompt files: loading, ``#@`` metadata, rendering a question into the template.
+
+A prompt file is a Python-styled file in ``prompts/`` (imports line, API docs, orientation notes,
+rules, few-shot examples, then a ``<<QUESTION>>`` placeholder).  It is kept apart from the LMP
+session because tests and benchmarks read prompt files without any LLM: they rebuild and execute
+the few-shot examples and count prompt tokens.
+
+Prompt files carry machine-readable metadata on lines that start with ``#@``: these are stripped
+before a prompt is sent, and let tests rebuild the scene of every few-shot example and execute it::
+
+    #@ example: stack_in_zone
+    #@ scene: {"objects": [["zone", "red", [0.5, 0.3]], ["block", "blue", [0.4, -0.1]]], ...}
+    #@ expect: ["movable small blue block with obj_id 2"]
+    objects = [...]
+    # the blue blocks.
+    ret_val = ...
+    #@ end
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from capmj.errors import ConfigError
+
+__all__ = [
+    "META",
+    "QUESTION",
+    "Example",
+    "PromptFile",
+    "load_prompt",
+    "load_system_prompt",
+    "object_names",
+    "prompts_dir",
+]
+
+QUESTION = "<<QUESTION>>"
+"""Placeholder in a prompt file replaced by the question of one call."""
+
+META = "#@"
+"""Prefix of metadata lines in prompt files (stripped before sending)."""
+
+
+def prompts_dir() -> Path:
+    """The prompt folder: ``$CAPMJ_PROMPTS_DIR`` or ``prompts/`` of the source checkout."""
+    env = os.environ.get("CAPMJ_PROMPTS_DIR")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[3] / "prompts"
+
+
+@dataclass(frozen=True)
+class Example:
+    """One few-shot example of a prompt file, with the metadata a test needs to execute it."""
+
+    id: str
+    body: str
+    """The example as it appears in the prompt (valid Python)."""
+    meta: Mapping[str, str]
+    """Raw metadata values by key (``scene``, ``expect``, ``check``, ``call``...)."""
+    line: int
+    """1-based line of the ``#@ example:`` marker in the prompt file."""
+
+    def json(self, key: str, default: Any = None) -> Any:
+        """A metadata value parsed as JSON (``default`` when absent)."""
+        raw = self.meta.get(key)
+        if raw is None:
+            return default
+        try:
+            return json.loads(raw)
+        except json.JSONDecodeError as exc:
+            raise ConfigError(f"example {self.id!r}: '#@ {key}:' is not JSON: {exc}") from None
+
+
+@dataclass(frozen=True)
+class PromptFile:
+    """A parsed prompt file."""
+
+    name: str
+    path: Path
+    raw: str
+    template: str
+    """The prompt without metadata lines, still containing :data:`QUESTION`."""
+    examples: tuple[Example, ...]
+
+    def render(self, question: str) -> str:
+        return self.template.replace(QUESTION, question.rstrip("\n"))
+
+
+def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
+    kept: list[str] = []
+    examples: list[Example] = []
+    current: dict[str, Any] | None = None
+    for lineno, line in enumerate(raw.splitlines(), start=1):
+        if line.startswith(META):
+            key, _, value = line[len(META):].strip().partition(":")
+            key, value = key.strip(), value.strip()
+            if key == "example":
+                if current is not None:
+                    raise ConfigError(f"{path}:{lineno}: example {value!r} starts inside "
+                                      f"example {current['id']!r} (missing '#@ end')")
+                current = {"id": value, "meta": {}, "lines": [], "line": lineno}
+            elif key == "end":
+                if current is None:
+                    raise ConfigError(f"{path}:{lineno}: '#@ end' outside an example")
+                body = "\n".join(current["lines"]).strip("\n") + "\n"
+                examples.append(Example(current["id"], body, dict(current["meta"]), current["line"]))
+                current = None
+            elif current is not None:
+                current["meta"][key] = value
+            continue
+        kept.append(line)
+        if current is not None:
+            current["lines"].append(line)
+    if current is not None:
+        raise ConfigError(f"{path}: example {current['id']!r} has no '#@ end'")
+    template = re.sub(r"\n{3,}", "\n\n", "\n".join(kept)).strip("\n") + "\n"
+    if QUESTION not in template:
+        raise ConfigError(f"{path}: prompt has no {QUESTION} placeholder")
+    ids = [e.id for e in examples]
+    if len(set(ids)) != len(ids):
+        raise ConfigError(f"{path}: duplicate example ids in {ids}")
+    return PromptFile(name, path, raw, template, tuple(examples))
+
+
+@lru_cache(maxsize=64)
+def _load_cached(path: str, mtime_ns: int) -> PromptFile:
+    p = Path(path)
+    return _parse_prompt(p.stem, p, p.read_text(encoding="utf-8"))
+
+
+def load_prompt(name: str, directory: Path | str | None = None) -> PromptFile:
+    """Load ``<directory>/<name>.py`` (or ``name`` as given when it has a suffix)."""
+    folder = Path(directory) if directory is not None else prompts_dir()
+    path = folder / (name if Path(name).suffix else f"{name}.py")
+    try:
+        stat = path.stat()
+    except FileNotFoundError:
+        raise ConfigError(f"prompt file {path} not found (set CAPMJ_PROMPTS_DIR to the prompts "
+                          "folder of a capmj checkout)") from None
+    return _load_cached(str(path), stat.st_mtime_ns)
+
+
+def load_system_prompt(directory: Path | str | None = None, name: str = "system.txt") -> str:
+    folder = Path(directory) if directory is not None else prompts_dir()
+    try:
+        return (folder / name).read_text(encoding="utf-8").strip()
+    except FileNotFoundError:
+        raise ConfigError(f"system prompt {folder / name} not found") from None
+
+
+def object_names(text: str) -> list[str] | None:
+    """The names of the first ``objects = [...]`` line of ``text`` (None when there is none)."""
+    for line in text.splitlines():
+        if line.startswith("objects = "):
+            try:
+                names = ast.literal_eval(line.partition("=")[2].strip())
+            except (ValueError, SyntaxError, MemoryError, RecursionError):
+                return None
+            if isinstance(names, (list, tuple)):
+                return [str(n) for n in names]
+    return None
