@@ -16,7 +16,9 @@ Conventions (the spec's, stated at every function):
   obj_id 3"), read from the live world on every call.  An int obj_id is accepted wherever a name
   is; unknown names raise ``ValueError`` listing close and valid names.
 * Footprints: blocks, zones and fixture walls are oriented rectangles (their geoms' xy extent at
-  the current yaw), bowls and balls discs; a tilted object (> 20°) uses its world xy box.
+  the current yaw), bowls and balls discs; a tilted object (> 20°) uses its world xy box.  The
+  geometry (footprints, surfaces, occupancy, free positions) lives in
+  :mod:`capmj.agents.footprints`; this module resolves names, validates arguments and logs.
 
 Every call is appended to :attr:`PlannerAPI.call_log` (function, arguments, result summary or
 error, simulated time) for the episode log.
@@ -26,26 +28,14 @@ from __future__ import annotations
 
 import difflib
 import math
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
-import mujoco
 import numpy as np
 
 from capmj.agents.base import EpisodeContext
-from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
+from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, WORKSPACE, Footprints
+from capmj.sim.objects import ObjectSpec
 from capmj.tasks.protocol import episode_rng
-
-WORKSPACE = (0.25, -0.5, 0.75, 0.5)
-"""(xmin, ymin, xmax, ymax) of the workspace, the default search area (m)."""
-REACH_RADIUS = 0.84
-"""Object centres farther than this (m, in xy) from the robot base are not offered as free
-positions: the far workspace corners (e.g. (0.73, 0.48)) are out of the UR5e's reach."""
-FREE_GRID_STEP = 0.005
-"""Pitch (m) of the candidate grid of :func:`get_random_free_pos`."""
-FREE_CLEARANCE = 0.045
-"""Default clearance (m) from a free position to every footprint: a big block (0.06 m, half
-diagonal 0.042 m) fits there at any yaw."""
-TILTED = math.radians(20.0)
 
 CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
 SIDE_NAMES = ("top side", "right side", "bottom side", "left side")
@@ -110,9 +100,8 @@ class PlannerAPI:
         """One entry per API call: ``{"i", "fn", "args", "result" | "error", "sim_time"}``."""
         self.messages: list[str] = []
         """What the plan said through ``say``."""
-        w = self._world
-        # the geoms of every object (static; their poses are read live)
-        self._geoms = {o.obj_id: [int(g) for g in np.flatnonzero(w.geom_obj == o.obj_id)] for o in w.objects}
+        self._footprints = Footprints.from_world(self._world)
+        """Table geometry (footprints, surfaces, occupancy, free positions), read live."""
 
     # ================================================================== names
     def _objects(self) -> tuple[ObjectSpec, ...]:
@@ -145,108 +134,12 @@ class PlannerAPI:
         more = f" … ({len(names)} objects)" if len(names) > len(shown) else ""
         raise ValueError(f"unknown object {obj!r}{hint} Valid names: {', '.join(map(repr, shown))}{more}")
 
-    # ================================================================== geometry
+    # ================================================================== poses
     def _pos(self, oid: int) -> np.ndarray:
         return np.asarray(self._world.pose(oid).pos, float)
 
     def _xquat(self, oid: int) -> list[float]:
         return [float(v) for v in self._world.pose(oid).xquat]
-
-    def _parts(self, o: ObjectSpec) -> list[tuple]:
-        """Footprint parts of an object now: ("disc", cx, cy, r) or ("rect", cx, cy, yaw, hx, hy)."""
-        w = self._world
-        pose = w.pose(o.obj_id)
-        if o.kind in ("bowl", "ball"):
-            r = BOWL_RADIUS if o.kind == "bowl" else BALL_RADIUS
-            return [("disc", pose.pos[0], pose.pos[1], r)]
-        if pose.tilt > TILTED:
-            lo, hi = w.aabb(o.obj_id)
-            return [("rect", (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0, (hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2)]
-        m, d = w.model, w.data
-        out = []
-        for g in self._geoms[o.obj_id]:
-            mat = d.geom_xmat[g].reshape(3, 3)
-            centre = d.geom_xpos[g] + mat @ m.geom_aabb[g, :3]
-            half = m.geom_aabb[g, 3:]
-            if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE):
-                out.append(("disc", centre[0], centre[1], float(half[0])))
-                continue
-            yaw = math.atan2(mat[1, 0], mat[0, 0])
-            out.append(("rect", centre[0], centre[1], yaw, float(half[0]), float(half[1])))
-        return out
-
-    def _part_arrays(self, objs: Sequence[ObjectSpec]) -> tuple[np.ndarray, np.ndarray]:
-        """Footprint parts of ``objs`` as one (k, 7) array [cx, cy, cos, sin, hx, hy, disc] and
-        the index into ``objs`` of every part."""
-        rows, owner = [], []
-        for k, o in enumerate(objs):
-            for p in self._parts(o):
-                if p[0] == "disc":
-                    rows.append((p[1], p[2], 1.0, 0.0, p[3], p[3], 1.0))
-                else:
-                    rows.append((p[1], p[2], math.cos(p[3]), math.sin(p[3]), p[4], p[5], 0.0))
-                owner.append(k)
-        return np.asarray(rows, float).reshape(-1, 7), np.asarray(owner, int)
-
-    @staticmethod
-    def _distances(px: np.ndarray, py: np.ndarray, parts: np.ndarray) -> np.ndarray:
-        """(n, k) distances (m) from points to footprint parts (0 inside)."""
-        dx = px[:, None] - parts[None, :, 0]
-        dy = py[:, None] - parts[None, :, 1]
-        c, s = parts[None, :, 2], parts[None, :, 3]
-        lx = np.abs(c * dx + s * dy) - parts[None, :, 4]
-        ly = np.abs(-s * dx + c * dy) - parts[None, :, 5]
-        rect = np.hypot(np.maximum(lx, 0.0), np.maximum(ly, 0.0))
-        disc = np.maximum(np.hypot(dx, dy) - parts[None, :, 4], 0.0)
-        return np.where(parts[None, :, 6] > 0, disc, rect)
-
-    def _footprint_distance(self, xy: Sequence[float], o: ObjectSpec) -> float:
-        parts, _ = self._part_arrays([o])
-        return float(self._distances(np.array([float(xy[0])]), np.array([float(xy[1])]), parts).min())
-
-    def _polygon(self, o: ObjectSpec):
-        from shapely.geometry import Point, Polygon
-        from shapely.ops import unary_union
-
-        shapes = []
-        for p in self._parts(o):
-            if p[0] == "disc":
-                shapes.append(Point(p[1], p[2]).buffer(p[3], 32))
-                continue
-            _, cx, cy, yaw, hx, hy = p
-            c, s = math.cos(yaw), math.sin(yaw)
-            shapes.append(Polygon([(cx + c * a - s * b, cy + s * a + c * b)
-                                   for a, b in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]))
-        return unary_union(shapes)
-
-    def _surface_z(self, xy: Sequence[float], exclude: set[int]) -> float:
-        """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
-        covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
-        z = 0.0
-        for o in self._objects():
-            if o.obj_id in exclude or o.kind == "zone":  # zones are flat marks, not surfaces
-                continue
-            if self._footprint_distance(xy, o) > 1e-3:
-                continue
-            if o.kind == "bowl":
-                c = self._pos(o.obj_id)
-                if math.hypot(xy[0] - c[0], xy[1] - c[1]) < BOWL_INNER_RADIUS:
-                    z = max(z, float(c[2]) - BOWL_HEIGHT / 2 + BOWL_FLOOR)
-                    continue
-            z = max(z, self._world.top_z(o.obj_id))
-        return z
-
-    def _resting_on(self, o: ObjectSpec) -> list[ObjectSpec]:
-        """Movable objects lying on top of ``o`` (centre over its footprint and above its top)."""
-        top = self._world.top_z(o.obj_id)
-        out = []
-        for other in self._objects():
-            if other.fixed or other.obj_id == o.obj_id:
-                continue
-            p = self._pos(other.obj_id)
-            if p[2] > top - 0.005 and self._footprint_distance(p[:2], o) <= 0.0:
-                out.append(other)
-        return out
 
     # ================================================================== logging
     def _logged(self, name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -428,20 +321,11 @@ class PlannerAPI:
         return np.asarray(pos, float)[:2]
 
     def _occupied(self, targ: Any, r: float) -> list[str]:
-        objs = self._objects()
         if isinstance(targ, (str, int, np.integer)) and not isinstance(targ, bool):
-            t = self._resolve(targ)
-            mine = self._polygon(t)
-            return [o.name for o in objs if o.obj_id != t.obj_id and mine.intersection(self._polygon(o)).area > 1e-6]
+            return [o.name for o in self._footprints.overlapping(self._resolve(targ))]
         if isinstance(targ, (list, tuple)) and len(targ) == 1 and (_is_vector(targ[0]) or _is_pose(targ[0])):
             targ = targ[0]  # the original API's one-element position lists
-        p = self._xy(targ)
-        parts, owner = self._part_arrays(objs)
-        if not len(parts):
-            return []
-        d = self._distances(np.array([p[0]]), np.array([p[1]]), parts)[0]
-        hit = set(owner[d <= r].tolist())
-        return [o.name for k, o in enumerate(objs) if k in hit]
+        return [o.name for o in self._footprints.within(self._xy(targ), r)]
 
     def _free_pos(self, targ: Any, area: Any, r: float) -> list[float]:
         if area is None and targ is not None and _is_vector(targ, (4,)):
@@ -452,41 +336,13 @@ class PlannerAPI:
             raise ValueError(f"area must be (xmin, ymin, xmax, ymax) in metres, got {_summary(area, 80)}")
         if not r >= 0:
             raise ValueError(f"r must be a clearance >= 0 in metres, got {r}")
-        xmin, ymin, xmax, ymax = (float(v) for v in area)
-        if xmin > xmax or ymin > ymax:
-            raise ValueError(f"area {area} is empty: the order is (xmin, ymin, xmax, ymax)")
-        # centres stay inside the workspace and, when the area is large enough, r from its border
-        wx0, wy0, wx1, wy1 = WORKSPACE
-        bx0, by0, bx1, by1 = max(xmin, wx0), max(ymin, wy0), min(xmax, wx1), min(ymax, wy1)
-        if bx0 > bx1 or by0 > by1:
-            raise ValueError(f"area {tuple(area)} lies outside the workspace {WORKSPACE}")
-        if bx1 - bx0 >= 2 * r + FREE_GRID_STEP and by1 - by0 >= 2 * r + FREE_GRID_STEP:
-            bx0, by0, bx1, by1 = bx0 + r, by0 + r, bx1 - r, by1 - r
-        nx = int(math.floor((bx1 - bx0) / FREE_GRID_STEP)) + 1
-        ny = int(math.floor((by1 - by0) / FREE_GRID_STEP)) + 1
-        xs = bx0 + FREE_GRID_STEP * np.arange(nx) + ((bx1 - bx0) - FREE_GRID_STEP * (nx - 1)) / 2
-        ys = by0 + FREE_GRID_STEP * np.arange(ny) + ((by1 - by0) - FREE_GRID_STEP * (ny - 1)) / 2
-        free = np.hypot(xs[:, None], ys[None, :]) <= REACH_RADIUS
-        parts, _ = self._part_arrays(self._objects())
-        extra = [self._xy(t) for t in self._targets(targ)]
-        if extra:
-            discs = np.array([(p[0], p[1], 1.0, 0.0, r, r, 1.0) for p in extra], float)
-            parts = np.vstack([parts, discs]) if len(parts) else discs
-        for part in parts:  # each part can only block the grid window around it
-            reach = (part[4] if part[6] else math.hypot(part[4], part[5])) + r
-            i0, i1 = np.searchsorted(xs, [part[0] - reach, part[0] + reach])
-            j0, j1 = np.searchsorted(ys, [part[1] - reach, part[1] + reach])
-            if i0 >= i1 or j0 >= j1:
-                continue
-            wx, wy = np.meshgrid(xs[i0:i1], ys[j0:j1], indexing="ij")
-            d = self._distances(wx.ravel(), wy.ravel(), part[None, :])[:, 0].reshape(wx.shape)
-            free[i0:i1, j0:j1] &= d >= r
-        idx = np.flatnonzero(free)
-        if not len(idx):
-            raise ValueError(f"no free position with clearance {r} m in area "
-                             f"({xmin:.3f}, {ymin:.3f}, {xmax:.3f}, {ymax:.3f})")
-        k = int(idx[int(self._rng.integers(len(idx)))])
-        return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
+
+        def reserved() -> Iterator[np.ndarray]:
+            # lazy, so that a bad area is reported before a bad targ (as the search checks it first)
+            for t in self._targets(targ):
+                yield self._xy(t)
+
+        return self._footprints.free_position(area, r, self._rng, reserved())
 
     def _targets(self, targ: Any) -> list[Any]:
         """``targ`` of get_random_free_pos as a list of names / positions / poses."""
@@ -510,7 +366,7 @@ class PlannerAPI:
             held = self._resolve(obj)
             if held.fixed:
                 raise ValueError(f"{held.name!r} is fixed and cannot be picked")
-            above = self._resting_on(held)
+            above = self._footprints.resting_on(held)
             if above:
                 raise ValueError(f"cannot pick {held.name!r}: {above[0].name!r} lies on top of it; move that first")
             pick = self._pos(held.obj_id)[:2]
@@ -525,9 +381,9 @@ class PlannerAPI:
             c = self._pos(t.obj_id)
             xy = c[:2]
             if t.kind == "bowl":
-                surface = self._surface_z(xy, exclude)
+                surface = self._footprints.surface_z(xy, exclude)
             else:
-                surface = max(self._surface_z(xy, exclude), 0.0 if t.kind == "zone" else w.top_z(t.obj_id))
+                surface = max(self._footprints.surface_z(xy, exclude), 0.0 if t.kind == "zone" else w.top_z(t.obj_id))
                 if t.kind in ("block", "zone"):
                     yaw = w.pose(t.obj_id).yaw  # line the object up with what it goes on
             place = np.array([xy[0], xy[1], surface + half])
@@ -541,7 +397,7 @@ class PlannerAPI:
                 raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
                                  f"xyzw), got {_summary(target, 80)}")
             p = np.asarray(target, float)
-            rest = self._surface_z(p[:2], exclude) + half
+            rest = self._footprints.surface_z(p[:2], exclude) + half
             place = np.array([p[0], p[1], max(rest, float(p[2])) if len(p) == 3 else rest])
         if not np.all(np.isfinite(place)):
             raise ValueError(f"target position {place.tolist()} is not finite")
@@ -554,4 +410,5 @@ class PlannerAPI:
             raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
 
 
-__all__ = ["FREE_CLEARANCE", "PlannerAPI", "REACH_RADIUS", "WORKSPACE", "denormalize_uv"]
+# the geometry constants are re-exported: callers and benchmarks import them from here
+__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "PlannerAPI", "REACH_RADIUS", "TILTED", "WORKSPACE", "denormalize_uv"]
