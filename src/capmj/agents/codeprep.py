@@ -14,6 +14,7 @@ import builtins
 import re
 
 from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES
+from capmj.agents.sandbox.checks import bound_names
 from capmj.errors import PlanError
 
 __all__ = [
@@ -32,24 +33,6 @@ SANDBOX_GLOBALS = PROVIDED_NAMES
 # rejects it (and ends the attempt with a recorded error).
 _BENIGN_MODULES = frozenset({"numpy", "math", "itertools", "shapely", "shapely.geometry",
                              "shapely.affinity", "env_utils", "plan_utils", "utils"})
-
-
-def bound_names(tree: ast.AST) -> set[str]:
-    """Every name ``tree`` binds anywhere (assignments, arguments, defs, except/import names)."""
-    names: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
-            names.add(node.id)
-        elif isinstance(node, ast.arg):
-            names.add(node.arg)
-        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-            names.add(node.name)
-        elif isinstance(node, ast.ExceptHandler) and node.name:
-            names.add(node.name)
-        elif isinstance(node, (ast.Import, ast.ImportFrom)):
-            for alias in node.names:
-                names.add((alias.asname or alias.name).split(".")[0])
-    return names
 
 
 def undefined_calls(code: str, known: set[str] | frozenset[str]) -> list[tuple[str, int, str]]:

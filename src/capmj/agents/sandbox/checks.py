@@ -64,15 +64,25 @@ _GROWING_METHODS = frozenset({"repeat", "resize", "ljust", "rjust", "center", "z
 # ------------------------------------------------------------------------------------------------
 # 1. static check
 # ------------------------------------------------------------------------------------------------
-def _bound_names(tree: ast.AST) -> set[str]:
+def bound_names(tree: ast.AST) -> set[str]:
+    """Every name ``tree`` binds anywhere (assignments, arguments, defs, except/import names).
+
+    Shared with the code preparation of the LLM agent (``capmj.agents.codeprep``), which needs the
+    same notion of "defined by this code" to find functions the code calls but never defines.
+    """
     names: set[str] = set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
             names.add(node.id)
         elif isinstance(node, ast.arg):
             names.add(node.arg)
-        elif isinstance(node, (ast.FunctionDef, ast.ExceptHandler)) and node.name:
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             names.add(node.name)
+        elif isinstance(node, ast.ExceptHandler) and node.name:
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                names.add((alias.asname or alias.name).split(".")[0])
     return names
 
 
@@ -121,7 +131,7 @@ def check_code(code: str) -> ast.Module:
     except (ValueError, RecursionError, MemoryError) as exc:
         raise PlanError(f"SyntaxError: {exc}", code=code) from None
     try:
-        _check_node(tree, None, _bound_names(tree), code)
+        _check_node(tree, None, bound_names(tree), code)
     except RecursionError:
         raise PlanError("SandboxViolation: code is nested too deeply", code=code) from None
     return tree
