@@ -13,6 +13,9 @@ import numpy as np
 
 
 class Recorder(Protocol):
+    def attach(self, world: Any) -> None:
+        """The episode's live ``World``, once built and settled (exact shapes, camera images)."""
+
     def frame(self, time: float, poses: Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]) -> None:
         """Poses of named bodies, ``(pos, quat_wxyz)``, at simulated ``time``."""
 
@@ -34,6 +37,9 @@ class Recorder(Protocol):
 
 class NullRecorder:
     """Records nothing."""
+
+    def attach(self, world) -> None:  # noqa: D102
+        pass
 
     def frame(self, time, poses) -> None:  # noqa: D102
         pass

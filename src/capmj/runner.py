@@ -83,6 +83,10 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
                              time.perf_counter() - t0, _error_text(exc))
     if not isinstance(rec, NullRecorder):
         _attach_frames(world, rec)
+        try:
+            rec.attach(world)
+        except Exception as exc:  # noqa: BLE001 - logging must never change the episode's outcome
+            rec.text("log_errors", f"attach failed: {_error_text(exc)}")
     rec.text("goal", scene.goal)
     ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
     error = None

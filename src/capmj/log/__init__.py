@@ -26,29 +26,6 @@ def __getattr__(name: str) -> Any:  # lazy: keep `import capmj.log` free of reru
     raise AttributeError(f"module 'capmj.log' has no attribute {name!r}")
 
 
-class _AttachingAgent:
-    """Wraps an agent so the recorder sees the live world once acting starts (for shapes and images)."""
-
-    def __init__(self, agent: Any, recorder: "RerunRecorder") -> None:
-        self._agent = agent
-        self._recorder = recorder
-        self.name = agent.name
-
-    @property
-    def model(self) -> str | None:
-        return getattr(self._agent, "model", None)
-
-    def __getattr__(self, item: str) -> Any:
-        return getattr(self._agent, item)
-
-    def act(self, ctx: Any) -> None:
-        try:
-            self._recorder.attach(ctx.world)
-        except Exception as exc:  # noqa: BLE001 - logging must never change the episode's outcome
-            self._recorder.text("log_errors", f"attach failed: {type(exc).__name__}: {exc}")
-        self._agent.act(ctx)
-
-
 def record_episode(task: Any, seed: int, agent: Any, path: str | Path | None, *, images: bool = False,
                    budget: "Budget | None" = None) -> "EpisodeResult":
     """Run one episode; when ``path`` is given, log it to that ``.rrd`` (summary included) and return
@@ -65,7 +42,7 @@ def record_episode(task: Any, seed: int, agent: Any, path: str | Path | None, *,
     rec = RerunRecorder(path, task=name, seed=seed, agent=getattr(agent, "name", None),
                         model=getattr(agent, "model", None), images=images)
     try:
-        result = run_episode(task, seed, _AttachingAgent(agent, rec), budget=budget, recorder=rec)
+        result = run_episode(task, seed, agent, budget=budget, recorder=rec)
         result = replace(result, rrd=str(path))
         rec.finish(result)
     finally:
