@@ -39,6 +39,9 @@ class MemoryRecorder:
         self.texts: dict[str, list[str]] = {}
         self.images: dict[str, np.ndarray] = {}
 
+    def attach(self, world) -> None:  # noqa: ANN001
+        pass
+
     def frame(self, time, poses) -> None:  # noqa: ANN001
         pass
 
@@ -434,3 +437,31 @@ def test_strip_benign_imports_keeps_dangerous_ones() -> None:
     assert removed == ["import numpy as np", "from env_utils import get_obj_pos"]
     assert "import os" in out and "from plan_utils import secret_tool" in out
     assert len(out.splitlines()) == len(src.splitlines())  # line numbers of errors stay right
+
+
+# ------------------------------------------------------------------------------------------------
+# the way users run it: the bench CLI, a worker process, an .rrd read back
+# ------------------------------------------------------------------------------------------------
+def test_bench_cli_runs_the_llm_agent_in_a_worker_and_logs_every_prompt(server: StubLLMServer, tmp_path: Path) -> None:
+    import json
+
+    from capmj.bench.cli import main
+    from capmj.replay import read_episode
+
+    server.respond_with(full_router())
+    out = tmp_path / "run"
+    rc = main(["--agent", "llm", "--model", "openai/stub", "--api-base", server.base_url, "--reporter", "text",
+               "--attempts", "3", "--tasks", TASK, "--seeds", str(SEED), "--workers", "1", "--out", str(out),
+               "--no-progress"])
+    assert rc == 0
+    (line,) = (out / "episodes.jsonl").read_text().splitlines()
+    rec = json.loads(line)
+    assert rec["success"] is True and rec["error"] is None, rec
+    assert rec["agent"] == "llm" and rec["model"] == "openai/stub" and rec["attempts"] == 2
+    assert rec["llm"]["calls"] == 10 == len(server.requests)  # the worker really talked HTTP
+    log = read_episode(out / rec["rrd"])
+    assert log.summary["success"] is True and log.summary["model"] == "openai/stub"
+    for k in (1, 2):
+        assert f"llm/attempt{k}/planner/1/prompt" in log.texts
+        assert f"llm/attempt{k}/planner/1/code" in log.texts
+    assert "put_first_on_second" in log.texts["llm/attempt2/planner/1/code"][0]
