@@ -59,8 +59,10 @@ class PrimitiveResult:
     message: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Plan:
+    """Joint-space samples of one segment, ``dt`` seconds apart, tracked by :meth:`Motion.execute`."""
+
     qs: np.ndarray   # (k, 6) joint samples
     dt: float        # seconds between samples
 
