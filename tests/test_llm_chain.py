@@ -216,7 +216,11 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
                      "api_calls", "verdict"):
             assert f"llm/attempt{k}/{path}" in rec.texts, (k, path)
     assert "put_first_on_second" in rec.texts["llm/attempt1/api_calls"][0]
-    assert rec.texts["llm/attempt1/verdict"] == ["not achieved"]
+    assert rec.texts["llm/attempt1/verdict"] == ["not achieved (reporter verdict from code; task predicate: False)"]
+    # per attempt: where the verdict came from, the predicate on the same state, whether the plan changed
+    assert (first["verdict_source"], first["predicate"], first["code_differs"]) == ("code", False, None)
+    assert (second["verdict_source"], second["predicate"], second["code_differs"]) == ("code", True, True)
+    assert first["temperature"] == 0.0 and second["temperature"] == 0.7
 
 
 def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:

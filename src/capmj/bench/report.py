@@ -40,7 +40,7 @@ TASK_LETTERS: dict[str, str] = {
 }
 """The thesis's letters of the benchmark tasks (Table 5.1), shown in front of the names."""
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
