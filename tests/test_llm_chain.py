@@ -65,6 +65,7 @@ def lmp_of(request: dict[str, Any]) -> str:
     """Which LMP a request comes from (by its prompt file's first instruction line)."""
     text = prompt_text(request)
     markers = {
+        "You check from a list of object poses": "reporter_direct",
         "Write the plan for the goal in the last comment": "planner",
         "Set ret_val to the object names": "parse_obj_name",
         "Set ret_val to the position": "parse_position",
