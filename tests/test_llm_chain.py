@@ -367,9 +367,10 @@ def test_vlm_reporter_sends_images_and_parses_the_verdict_from_code(server: Stub
     rec = MemoryRecorder()
     result = episode(agent(server, reporter="vlm"), rec)
     (attempt,) = result.llm["attempts"]
-    if attempt.get("reporter_error", "").startswith("no images"):
-        pytest.skip(f"no OpenGL renderer: {attempt['reporter_error']}")
+    if any("no images" in e for e in attempt["reporter_errors"]):
+        pytest.skip(f"no OpenGL renderer: {attempt['reporter_errors']}")
     assert attempt["verdict"] is False and "not stacked" in attempt["report"]
+    assert attempt["verdict_source"] == "code" and attempt["predicate"] is True  # a false negative
     assert result.success  # the predicate judges the scene, the reporter only drives re-planning
     vlm = [r for r in server.requests if lmp_of(r) == "vlm_reporter"]
     assert len(vlm) == 1
@@ -470,3 +471,9 @@ def test_bench_cli_runs_the_llm_agent_in_a_worker_and_logs_every_prompt(server: 
         assert f"llm/attempt{k}/planner/1/prompt" in log.texts
         assert f"llm/attempt{k}/planner/1/code" in log.texts
     assert "put_first_on_second" in log.texts["llm/attempt2/planner/1/code"][0]
+    # the closed-loop figures are in summary.json and summary.md
+    loop = json.loads((out / "summary.json").read_text())["overall"]["llm openai/stub"]["loop"]
+    assert (loop["reporter_runs"], loop["verdicts"], loop["agree"], loop["compared"]) == (2, 2, 2, 2)
+    assert (loop["replans"], loop["identical_replans"]) == (1, 0)
+    assert loop["mean_tokens"] == rec["llm"]["prompt_tokens"] + rec["llm"]["completion_tokens"] > 0
+    assert "| **Overall** | llm openai/stub | 1/1 (100 %) | 2.00 | 2/2 (100 %) |" in (out / "summary.md").read_text()

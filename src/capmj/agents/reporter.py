@@ -162,7 +162,7 @@ def _is_bool(value: Any) -> bool:
 
 
 def _failing_line(exc: PlanError, code: str) -> str:
-    """``"\n    line N: <source>"`` for an error with a line in ``code``, else ``""``."""
+    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
     lines = code.splitlines()
     if exc.line is None or not 1 <= exc.line <= len(lines):
         return ""
@@ -223,7 +223,9 @@ class TextReporter:
         return None
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
-        question = f"{session.objects_text().strip()}\n# goal: {' '.join(goal.split())}"
+        sentence = " ".join(goal.split())
+        sentence = sentence if sentence.endswith((".", "?", "!")) else sentence + "."
+        question = f"{session.objects_text().strip()}\n# goal: {sentence}"
         messages = session.messages(session.prompt("parse_completion").render(question))
         errors: tuple[str, ...] = ()
         for source in ("code", "repair"):
