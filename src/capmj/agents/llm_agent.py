@@ -159,7 +159,7 @@ class LLMAgent:
         goal = ctx.scene.goal
         reporter = make_reporter(self.reporter, self.prompts_dir)
         feedback: Feedback | None = None
-        plans: list[str] = []
+        plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
         last_error: BaseException | None = None
         try:
             if reporter is not None:
@@ -169,7 +169,7 @@ class LLMAgent:
                     ctx.reset()
                 record, error, report, outcome = self._attempt(ctx, clients, transcript, k, goal, reporter,
                                                                feedback, plans)
-                plans.append(outcome.key or "")
+                plans.append(outcome.key)
                 attempts.append(record)
                 last_error = error
                 unknown = error is None and report is not None and report.verdict is None
@@ -201,7 +201,7 @@ class LLMAgent:
             raise last_error
 
     def _attempt(self, ctx: EpisodeContext, clients: tuple[LLMClient, LLMClient], transcript: list[LMPCall],
-                 k: int, goal: str, reporter: Any, feedback: Feedback | None, plans: list[str]
+                 k: int, goal: str, reporter: Any, feedback: Feedback | None, plans: list[str | None]
                  ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
         client, replan_client = clients
 

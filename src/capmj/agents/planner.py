@@ -123,7 +123,7 @@ def build_messages(session: LMPSession, goal: str, feedback: Feedback | None = N
 
 
 def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = None,
-                 previous: Sequence[str] = (), budget: SandboxBudget = DEFAULT_PLAN_BUDGET,
+                 previous: Sequence[str | None] = (), budget: SandboxBudget = DEFAULT_PLAN_BUDGET,
                  outcome: PlanOutcome | None = None) -> PlanOutcome:
     """Ask for a plan and run it.  Raises LLMError (provider) or PlanError (code); ``outcome``
     (when given) holds the completion and executed code even then.
@@ -139,7 +139,8 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
     if out.key in previous:
         out.first_identical_to = list(previous).index(out.key) + 1
         out.extra_request = True
-        session.record(call, "error", f"identical to the plan of attempt {out.first_identical_to}; asking again")
+        session.recorder.text(f"llm/attempt{session.attempt}/planner/{call.n}/identical_to",
+                              f"identical to the plan of attempt {out.first_identical_to}; asking for a different plan")
         messages = messages + [
             {"role": "assistant", "content": out.completion},
             {"role": "user", "content": (

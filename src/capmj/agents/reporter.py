@@ -70,7 +70,7 @@ class Report:
             out += f"; {self.reason}"
         if self.wrong:
             out += f"\nobjects whose state is wrong: {list(self.wrong)}"
-        if self.error:
+        if self.error and self.verdict is None:  # how a known verdict was reached is in ``errors``
             out += f" [{self.error}]"
         return out
 
