@@ -18,7 +18,8 @@ class DivideBlocks(BenchTask):
         "Divide the blocks into groups of {k} and stack each group (also including the group with
         block number less than {k}) in a different zone."  7–8 small blocks of distinct colours
         and ceil(n / k) zones of distinct colours, so every group has a zone of its own.  Which
-        block goes into which group is free.
+        block goes into which group is free.  The spec's wording is kept when k divides n (eight
+        blocks in pairs): then there is simply no smaller group.
     Randomizations:
         n ∈ {7, 8}, k ∈ {2, 3}, block and zone colours, all poses and yaws (no block starts in a
         zone).

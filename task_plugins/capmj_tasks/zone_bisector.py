@@ -128,7 +128,7 @@ class ZoneBisector(BenchTask):
         else:
             diags.append(f"the row's midpoint is {rep.midpoint_error:.3f} m from the midpoint of the zone centres "
                          f"(max {P.ROW_MID_TOL})")
-        ok = rep.ok and met == 2 * len(ids)
+        ok = met == 2 * len(ids)  # every block, gap and the midpoint: exactly rep.ok plus flat blocks
         if ok:
             diags.append(f"{len(ids)} blocks evenly spaced on the bisector, centred between the zones")
         return verdict(met, 2 * len(ids), ok, diags)
