@@ -13,27 +13,16 @@ import pytest
 
 from capmj.tasks import predicates as P
 from capmj_tasks.zone_bisector import PITCH, row_geometry
-from test_tasks import SOLVE_SEEDS, assert_rejects, rebuild_tower, set_pos, solved
+from test_tasks import SOLVE_SEEDS, assert_rejects, rebuild_tower, set_pos, solved, stacks_of
 
 SEEDS = SOLVE_SEEDS[:10]
-
-
-def _towers(scene, goals) -> dict[int, list[int]]:
-    """{zone id: block ids bottom to top} of the stacks the oracle builds."""
-    zones = [o for o in scene.objects if o.kind == "zone"]
-    out: dict[int, list[int]] = {}
-    for g in goals:
-        t = g.targets[0].pos
-        z = next(z.obj_id for z in zones if math.hypot(z.pos[0] - t[0], z.pos[1] - t[1]) < 1e-9)
-        out.setdefault(z, []).append(g.objects[0])
-    return out
 
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_divide_blocks_wrong_group_sizes(seed):
     t, scene, goals, state = solved("divide-blocks", seed)
     assert t.evaluate(scene, state).success
-    towers = sorted(_towers(scene, goals).items(), key=lambda kv: -len(kv[1]))
+    towers = sorted(stacks_of(scene, goals), key=lambda kv: -len(kv[1]))
     (z_big, big), (z_other, other), (z_small, small) = towers[0], towers[1], towers[-1]
     # the top block of a full group moved onto another full group: one group too small, one too big
     moved = rebuild_tower(state, other + [big[-1]], state.pos(z_other)[:2])
