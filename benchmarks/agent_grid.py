@@ -1,9 +1,12 @@
 """Shared runner of ``oracle.py`` and ``reference.py``: one agent over tasks × test seeds.
 
-Prints one JSON object per task to stderr as it finishes and, last, a summary JSON object on
-stdout: success rate, mean primitives and wall seconds per task, and every failure with its seed,
-goal, error and diagnostics.  Tasks default to every registered task (A–J, the generated tasks and
-any installed plugin task); ``--tasks`` takes names, tags or ``all``.
+Episodes are spread over ``--workers`` processes one (task, seed) at a time, so the load stays
+balanced and each finished episode is printed at once: one JSON line per episode on stderr
+(task, seed, success, primitives, wall seconds, error, diagnostics), then one per task, and last
+a summary JSON object on stdout: success rate, mean primitives and wall seconds per task, and
+every failure with its seed, goal, error and diagnostics.  Results do not depend on the number of
+workers.  Tasks default to every registered task (A–J, the generated tasks and any installed
+plugin task); ``--tasks`` takes names, tags or ``all``.
 """
 
 from __future__ import annotations
@@ -11,38 +14,33 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from concurrent.futures import ProcessPoolExecutor
-from functools import partial
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from capmj.tasks.registry import get_task, resolve
 
 
-def make_agent(kind: str):
-    if kind == "oracle":
-        from capmj.agents.oracle import OracleAgent
-
-        return OracleAgent()
-    from capmj.agents.reference import ReferenceAgent
-
-    return ReferenceAgent()
-
-
-def run_task(kind: str, name: str, seeds: list[int]) -> tuple[dict, list[dict]]:
+def run_one(kind: str, name: str, seed: int) -> dict:
+    """One episode of agent ``kind`` ("oracle" or "reference") as a JSON-friendly dict."""
     from capmj.runner import run_episode
 
-    task, agent = get_task(name), make_agent(kind)
-    results = [run_episode(task, s, agent) for s in seeds]
-    n = len(results)
-    stats = {
+    if kind == "oracle":
+        from capmj.agents.oracle import OracleAgent as Agent
+    else:
+        from capmj.agents.reference import ReferenceAgent as Agent
+    r = run_episode(get_task(name), seed, Agent())
+    return {"task": name, "seed": seed, "success": r.success, "primitives": r.primitives, "wall_s": r.wall_s,
+            "sim_s": r.sim_s, "goal": r.goal, "error": r.error, "diagnostics": list(r.diagnostics)}
+
+
+def summarize(name: str, episodes: list[dict]) -> dict:
+    n = len(episodes)
+    return {
         "n": n,
-        "success_rate": sum(r.success for r in results) / n,
-        "mean_primitives": sum(r.primitives for r in results) / n,
-        "mean_wall_s": sum(r.wall_s for r in results) / n,
-        "mean_sim_s": sum(r.sim_s for r in results) / n,
+        "success_rate": sum(e["success"] for e in episodes) / n,
+        "mean_primitives": sum(e["primitives"] for e in episodes) / n,
+        "mean_wall_s": sum(e["wall_s"] for e in episodes) / n,
+        "mean_sim_s": sum(e["sim_s"] for e in episodes) / n,
     }
-    failures = [{"task": name, "seed": r.seed, "goal": r.goal, "error": r.error, "diagnostics": list(r.diagnostics)}
-                for r in results if not r.success]
-    return stats, failures
 
 
 def main(kind: str, doc: str, argv: list[str] | None = None) -> int:
@@ -53,17 +51,28 @@ def main(kind: str, doc: str, argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     seeds = [10001 + 2 * k for k in range(args.seeds)]
     names = resolve(args.tasks)
-    per_task, failures = {}, []
-    work = partial(run_task, kind)
+    jobs = [(name, seed) for name in names for seed in seeds]
+    by_task: dict[str, list[dict]] = {name: [] for name in names}
+
+    def record(ep: dict) -> None:
+        by_task[ep["task"]].append(ep)
+        print(json.dumps({k: ep[k] for k in ("task", "seed", "success", "primitives", "wall_s", "error")}
+                         | {"diagnostics": ep["diagnostics"] if not ep["success"] else []}), file=sys.stderr, flush=True)
+        if len(by_task[ep["task"]]) == len(seeds):
+            print(json.dumps({"task": ep["task"], **summarize(ep["task"], by_task[ep["task"]])}),
+                  file=sys.stderr, flush=True)
+
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
-            done = list(pool.map(work, names, [seeds] * len(names)))
+            futures = [pool.submit(run_one, kind, name, seed) for name, seed in jobs]
+            for f in as_completed(futures):
+                record(f.result())
     else:
-        done = (work(n, seeds) for n in names)
-    for name, (stats, fails) in zip(names, done):
-        per_task[name] = stats
-        failures += fails
-        print(json.dumps({"task": name, **stats}), file=sys.stderr, flush=True)
+        for name, seed in jobs:
+            record(run_one(kind, name, seed))
+    per_task = {name: summarize(name, eps) for name, eps in by_task.items()}
+    failures = [{k: e[k] for k in ("task", "seed", "goal", "error", "diagnostics")}
+                for name in names for e in sorted(by_task[name], key=lambda e: e["seed"]) if not e["success"]]
     n = sum(v["n"] for v in per_task.values())
     overall = sum(v["success_rate"] * v["n"] for v in per_task.values()) / n if n else 0.0
     print(json.dumps({"agent": kind, "seeds": args.seeds, "overall_success_rate": overall,
