@@ -286,3 +286,77 @@ def test_ravens_reward_zone_metric_and_rotation():
 def test_short_label():
     assert P.short_label(block(3, (0.5, 0, 0.03), size="big", color="red")) == "big red block 3"
     assert P.short_label(ObjectSpec(1, "zone", "green", (0.5, 0, 0))) == "green zone 1"
+
+
+# ================================================================== generated tasks 6–10 predicates
+def zone(i: int, pos, yaw: float = 0.0, color: str = "green") -> ObjectSpec:
+    return ObjectSpec(i, "zone", color, tuple(pos), yaw)
+
+
+def test_largest_odd_and_group_sizes():
+    assert [P.largest_odd_at_most(n) for n in range(0, 7)] == [0, 1, 1, 3, 3, 5, 5]
+    assert P.group_sizes(7, 3) == [3, 3, 1] and P.group_sizes(8, 2) == [2, 2, 2, 2] and P.group_sizes(8, 3) == [3, 3, 2]
+
+
+def test_zone_color_counts_and_zone_stacks():
+    objs = [zone(1, (0.5, 0.0, 0.0005)), zone(2, (0.5, 0.3, 0.0005), color="blue"),
+            block(3, (0.5, 0.0, 0.02)), block(4, (0.5, 0.0, 0.06), color="blue"), block(5, (0.5, 0.3, 0.02)),
+            block(6, (0.3, -0.3, 0.02))]
+    s = state_of(objs)
+    assert P.zone_color_counts(s, 1) == {"red": [3], "blue": [4]}
+    a, b = P.zone_stacks(s, [1, 2], [3, 4, 5, 6])
+    assert a.ok and a.tower == (3, 4) and a.members == (3, 4)
+    assert b.ok and b.members == (5,)
+    # the upper block slid off the axis: two members, a tower of one
+    s2 = state_of(objs, {4: (0.525, 0.0, 0.06)})
+    a = P.zone_stacks(s2, [1], [3, 4])[0]
+    assert not a.ok and a.tower == (3,) and "off the stack axis" in a.why
+    # two blocks side by side on the table in one zone: both stacks of one, not one stack
+    s3 = state_of(objs, {4: (0.5, 0.045, 0.02)})
+    a = P.zone_stacks(s3, [1], [3, 4])[0]
+    assert not a.ok and len(a.tower) == 1 and "off the stack axis" in a.why
+    assert P.zone_stacks(s, [2], [3, 4])[0].why == "empty"
+
+
+def test_row_on_line_spacing_offsets_and_midpoint():
+    e = np.array([math.cos(0.4), math.sin(0.4)])
+    n = np.array([-e[1], e[0]])
+    mid = np.array([0.5, 0.05])
+    pts = [mid + (k - 2) * 0.08 * e for k in range(5)]
+    rep = P.row_on_line(pts[::-1], mid, e, 0.08)
+    assert rep.ok and rep.order == (4, 3, 2, 1, 0) and max(rep.offsets) < 1e-12 and rep.midpoint_error < 1e-12
+    # within tolerance: 0.012 off the line, a gap 0.012 longer
+    ok = [p + 0.012 * n for p in pts]
+    ok[-1] = ok[-1] + 0.012 * e
+    assert P.row_on_line(ok, mid, e, 0.08).ok
+    bad = list(pts)
+    bad[-1] = bad[-1] + 0.02 * e  # uneven gap
+    rep = P.row_on_line(bad, mid, e, 0.08)
+    assert not rep.ok and any("apart" in r for r in rep.reasons)
+    bad = list(pts)
+    bad[1] = bad[1] + 0.02 * n  # off the line
+    assert any("off the line" in r for r in P.row_on_line(bad, mid, e, 0.08).reasons)
+    slid = [p + 0.03 * e for p in pts]  # even and on the line, but not centred
+    rep = P.row_on_line(slid, mid, e, 0.08)
+    assert not rep.ok and rep.reasons == (rep.reasons[0],) and "midpoint" in rep.reasons[0]
+    assert not P.row_on_line([], mid, e, 0.08).ok
+
+
+def test_fixture_slots_and_occupants():
+    fx = ObjectSpec(1, "fixture", "gray", (0.5, 0.0, 0.02), math.pi / 6)
+    slots = P.fixture_slots(fx.pos, fx.yaw)
+    c, s_ = math.cos(math.pi / 6), math.sin(math.pi / 6)
+    assert np.allclose(slots[1], (0.5 + 0.04 * c, 0.04 * s_, 0.02)) and np.allclose(slots[2], (0.5 - 0.04 * s_, 0.04 * c, 0.02))
+    seats = P.fixture_slots(fx.pos, fx.yaw, clearance=0.002)
+    assert np.all(np.linalg.norm(seats - slots, axis=1) < 0.005)
+    blocks = [block(2 + k, tuple(p), color=col) for k, (p, col) in enumerate(zip(slots, ("red", "blue", "green")))]
+    st = state_of([fx, *blocks])
+    assert P.slot_occupants(st, 1, [2, 3, 4]) == [2, 3, 4]
+    # 1.5 cm out of the slot: empty; 1 cm: still in; tilted: not in
+    xdir = np.array([c, s_, 0.0])
+    assert P.slot_occupants(state_of([fx, *blocks], {3: tuple(slots[1] + 0.015 * xdir)}), 1, [2, 3, 4]) == [2, None, 4]
+    assert P.slot_occupants(state_of([fx, *blocks], {3: tuple(slots[1] + 0.01 * xdir)}), 1, [2, 3, 4]) == [2, 3, 4]
+    tilted = state_of([fx, *blocks], {4: Pose(tuple(slots[2]), tilt_quat(math.radians(30)))})
+    assert P.slot_occupants(tilted, 1, [2, 3, 4]) == [2, 3, None]
+    # the farthest point of the L (outer end of the long wall) is FIXTURE_RADIUS from the origin
+    assert P.FIXTURE_RADIUS == pytest.approx(math.hypot(0.07, 0.03)) and P.FIXTURE_RADIUS > fx.footprint_radius

@@ -424,3 +424,176 @@ __all__ = [
     "ravens_reward", "resting_on", "resting_on_table", "short_label", "toppled", "zone_half_size",
     "zone_local_xy", "zone_outside_distance",
 ]
+
+
+# ======================================================================================= generated 6–10
+# Checks of the generated tasks 6–10 (stack groups, zone counts, rows on a line, fixture slots).
+# Kept in one appended section (with its own imports and ``__all__`` extension) so the halves of
+# issue 8 merge cleanly.
+from dataclasses import dataclass as _dataclass  # noqa: E402
+
+from capmj.sim.objects import BLOCK_SIZES, FIXTURE_HEIGHT, FIXTURE_LONG, FIXTURE_WALL  # noqa: E402
+
+FIXTURE_SLOT = BLOCK_SIZES["small"]
+"""Slot pitch ``a`` (m) of an L-fixture: the slots hold small blocks.  Must equal the ``a`` of
+``capmj.sim.scene._add_fixture``, whose body origin is the centre of slot (0, 0)."""
+FIXTURE_SLOTS_LOCAL: tuple[tuple[float, float, float], ...] = (
+    (0.0, 0.0, 0.0), (FIXTURE_SLOT, 0.0, 0.0), (0.0, FIXTURE_SLOT, 0.0))
+"""The three slots in the fixture frame (spec task 10): along the long wall, then the short one."""
+FIXTURE_RADIUS = math.hypot(FIXTURE_LONG - FIXTURE_SLOT / 2 - FIXTURE_WALL, FIXTURE_SLOT / 2 + FIXTURE_WALL)
+"""Distance (m) from the fixture origin to its farthest point (the outer end of the long wall,
+local (0.07, −0.03)); larger than ``ObjectSpec.footprint_radius``, which assumes a centred box."""
+SLOT_TOL = 0.012
+"""A block fills a slot when its centre is within this distance (m, 3-D) of the slot centre."""
+ROW_LINE_TOL = 0.015
+"""Row blocks: centre within this distance (m) of the line."""
+ROW_PITCH_TOL = 0.015
+"""Row blocks: neighbour centre spacing within this (m) of the required pitch."""
+ROW_MID_TOL = 0.02
+"""Row blocks: the mean of the centres within this distance (m) of the required midpoint."""
+
+
+def largest_odd_at_most(n: int) -> int:
+    """The largest odd number ≤ ``n`` (0 when ``n`` < 1)."""
+    return n if n % 2 == 1 else max(n - 1, 0)
+
+
+def zone_color_counts(state: SceneState, zone_id: int) -> dict[str, list[int]]:
+    """``{colour: [block ids]}`` of the blocks whose centre is in the zone (see :func:`in_zone`)."""
+    out: dict[str, list[int]] = {}
+    for i in objects_in_zone(state, zone_id):
+        out.setdefault(state.spec(i).color, []).append(i)
+    return out
+
+
+@_dataclass(frozen=True)
+class ZoneStack:
+    """The blocks of one zone seen as a stack: ``members`` are the given blocks whose centre is in
+    the zone, ``tower`` the tallest valid stack among them (bottom first), ``ok`` whether all
+    members form that one stack, ``why`` the reason when not."""
+
+    zone: int
+    members: tuple[int, ...]
+    tower: tuple[int, ...]
+    ok: bool
+    why: str
+
+
+def zone_stacks(state: SceneState, zone_ids: Sequence[int], ids: Iterable[int]) -> list[ZoneStack]:
+    """For each zone, whether the blocks of ``ids`` lying in it form exactly one stack.
+
+    A zone with no block is not ok ("empty").  Stack rules are :func:`is_stack`'s (axis 0.02 m,
+    z gaps ± 0.015 m, tilt ≤ 15°, the bottom on the table).
+    """
+    ids = list(ids)
+    out = []
+    for z in zone_ids:
+        members = [i for i in ids if in_zone(state, i, z)]
+        tower = build_tower(state, members, z)
+        if not members:
+            ok, why = False, "empty"
+        else:
+            ok, why = is_stack(state, find_stack_order(state, members))
+            ok = ok and len(tower) == len(members)
+            if not ok and len(tower) < len(members) and why.endswith("stacked"):
+                why = f"{len(members) - len(tower)} block(s) in the zone are not on its stack"
+        out.append(ZoneStack(z, tuple(members), tuple(tower), ok, why))
+    return out
+
+
+def group_sizes(n: int, k: int) -> list[int]:
+    """Sizes of ``n`` items divided into groups of ``k`` (the last one smaller when k ∤ n),
+    largest first."""
+    return [k] * (n // k) + ([n % k] if n % k else [])
+
+
+@_dataclass(frozen=True)
+class RowReport:
+    """How well points form an evenly spaced row along a line (see :func:`row_on_line`).
+
+    ``order`` are the input indices sorted along the line, ``offsets`` each point's distance from
+    the line (input order), ``gaps`` the centre distances of neighbours in row order,
+    ``midpoint_error`` the distance from the mean of the points to the required midpoint.
+    """
+
+    ok: bool
+    order: tuple[int, ...]
+    offsets: tuple[float, ...]
+    gaps: tuple[float, ...]
+    midpoint_error: float
+    reasons: tuple[str, ...]
+
+
+def row_on_line(
+    points: Sequence[Sequence[float]],
+    line_point: Sequence[float],
+    line_dir: Sequence[float],
+    pitch: float,
+    *,
+    line_tol: float = ROW_LINE_TOL,
+    pitch_tol: float = ROW_PITCH_TOL,
+    mid_tol: float = ROW_MID_TOL,
+) -> RowReport:
+    """Whether the xy of ``points`` lie on the line through ``line_point`` along ``line_dir``,
+    evenly spaced and centred on ``line_point``.
+
+    Tolerances: every centre within ``line_tol`` (0.015 m) of the line; every neighbour centre
+    distance (in order along the line) within ``pitch_tol`` (0.015 m) of ``pitch``; the mean of
+    the centres within ``mid_tol`` (0.02 m) of ``line_point``.  Reasons name point indices.
+    """
+    p = np.asarray(points, dtype=float).reshape(len(points), -1)[:, :2] if len(points) else np.zeros((0, 2))
+    c = np.asarray(line_point, dtype=float)[:2]
+    e = np.asarray(line_dir, dtype=float)[:2]
+    e = e / np.linalg.norm(e)
+    n = np.array([-e[1], e[0]])
+    along = (p - c) @ e
+    offsets = np.abs((p - c) @ n)
+    order = np.argsort(along, kind="stable")
+    gaps = np.hypot(*np.diff(p[order], axis=0).T) if len(p) > 1 else np.zeros(0)
+    mid = float(np.hypot(*(p.mean(axis=0) - c))) if len(p) else math.inf
+    reasons = [f"point {i} is {offsets[i]:.3f} m off the line (max {line_tol})"
+               for i in range(len(p)) if offsets[i] > line_tol]
+    reasons += [f"points {order[k]} and {order[k + 1]} are {g:.3f} m apart (need {pitch:.3f} ± {pitch_tol})"
+                for k, g in enumerate(gaps) if abs(g - pitch) > pitch_tol]
+    if mid > mid_tol:
+        reasons.append(f"the row's midpoint is {mid:.3f} m from the required midpoint (max {mid_tol})")
+    return RowReport(not reasons and len(p) > 0, tuple(int(i) for i in order), tuple(float(v) for v in offsets),
+                     tuple(float(g) for g in gaps), mid, tuple(reasons))
+
+
+def fixture_slots(origin: Sequence[float], yaw: float, clearance: float = 0.0) -> np.ndarray:
+    """(3, 3) world centres of a small block in each slot of an L-fixture whose origin (slot
+    (0, 0), as ``get_obj_pos`` reports it) is ``origin`` and whose yaw is ``yaw``.
+
+    The slot z is the table (``origin`` z − FIXTURE_HEIGHT/2) plus half a block.  ``clearance``
+    shifts each centre away from the walls and from the other slots (slot (0,0) by (c, c), slot
+    (a,0) by (2c, c), slot (0,a) by (c, 2c)): a block lowered there does not scrape its
+    neighbours, and stays well within ``SLOT_TOL`` of the slot centre.
+    """
+    o = np.asarray(origin, dtype=float)
+    cs, sn = math.cos(yaw), math.sin(yaw)
+    shift = ((1, 1), (2, 1), (1, 2))
+    z = float(o[2]) - FIXTURE_HEIGHT / 2 + FIXTURE_SLOT / 2
+    out = []
+    for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift):
+        u, v = u + clearance * du, v + clearance * dv
+        out.append((o[0] + cs * u - sn * v, o[1] + sn * u + cs * v, z))
+    return np.array(out)
+
+
+def slot_occupants(state: SceneState, fixture_id: int, ids: Iterable[int], tol: float = SLOT_TOL) -> list[int | None]:
+    """Per slot of the fixture, the upright block of ``ids`` whose centre is within ``tol``
+    (0.012 m, 3-D) of the slot centre (the nearest one), else None."""
+    slots = fixture_slots(state.pos(fixture_id), state.poses[fixture_id].yaw)
+    out: list[int | None] = []
+    for s in slots:
+        best = min(((float(np.linalg.norm(state.pos(i) - s)), i) for i in ids if not toppled(state, i)), default=None)
+        out.append(best[1] if best is not None and best[0] <= tol else None)
+    return out
+
+
+__all__ += [
+    "FIXTURE_RADIUS", "FIXTURE_SLOT", "FIXTURE_SLOTS_LOCAL", "ROW_LINE_TOL", "ROW_MID_TOL", "ROW_PITCH_TOL",
+    "RowReport", "SLOT_TOL", "ZoneStack", "fixture_slots", "group_sizes", "largest_odd_at_most", "row_on_line",
+    "slot_occupants", "zone_color_counts", "zone_stacks",
+]

@@ -198,6 +198,21 @@ class Spawner:
     def bowl(self, color: str, **kw) -> ObjectSpec:
         return self.place("bowl", color, **kw)
 
+    def reserve(self, xy: Sequence[float], radius: float) -> None:
+        """Keep a circle free of later placements (e.g. target spots a task needs empty at reset)."""
+        self._cx.append(float(xy[0]))
+        self._cy.append(float(xy[1]))
+        self._cr.append(float(radius))
+
+    def add(self, spec: ObjectSpec, radius: float | None = None) -> ObjectSpec:
+        """Register an object the task placed itself (its id must be :attr:`next_id`); ``radius``
+        replaces its footprint circle when the spec's circle is too small for its real shape."""
+        if spec.obj_id != self.next_id:
+            raise ValueError(f"object id {spec.obj_id} is not the next id {self.next_id}")
+        self._objects.append(spec)
+        self.reserve(spec.pos, spec.footprint_radius if radius is None else radius)
+        return spec
+
 
 # --------------------------------------------------------------------------------------- colours
 def pick_colors(
