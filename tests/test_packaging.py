@@ -26,13 +26,13 @@ import json, sys
 import capmj, capmj_tasks
 from capmj.agents.oracle import OracleAgent
 from capmj.agents.reference import ReferenceAgent, reference_plan
-from capmj.resources import packaged, prompts_dir
+from capmj.resources import mjcf_path, prompts_dir
 from capmj.runner import run_episode
 from capmj.tasks.registry import get_task
 
 task = get_task(sys.argv[1])
 out = {"files": [capmj.__file__, capmj_tasks.__file__, reference_plan(task)[1], str(prompts_dir()),
-                 str(packaged("mjcf") / "README.md")]}
+                 str(mjcf_path("table.xml"))]}
 for agent in (ReferenceAgent(), OracleAgent()):
     r = run_episode(task, int(sys.argv[2]), agent)
     out[agent.name] = [r.success, r.error, r.primitives, r.sim_s]
@@ -77,7 +77,7 @@ def test_wheel_runs_reference_and_oracle_outside_the_source_tree(wheel, tmp_path
 
     names = set(zipfile.ZipFile(wheel).namelist())
     assert f"capmj/prompts/reference/{TASK}.py" in names and "capmj/prompts/system.txt" in names
-    assert "capmj/mjcf/README.md" in names
+    assert "capmj/mjcf/table.xml" in names and "capmj/mjcf/fixture.xml" in names
     assert not any(n.startswith("capmj/prompts/") and n.endswith("__init__.py") for n in names)
 
     venv = tmp_path / "venv"

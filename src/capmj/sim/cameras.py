@@ -29,6 +29,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import weakref
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -194,7 +195,7 @@ class CameraRig:
             self._top_id = m.camera(HEIGHTMAP_CAMERA).id
         except KeyError:
             self._top_id = -1
-        self.bounds = np.array(WORKSPACE, dtype=np.float64)
+        self.bounds = WORKSPACE.as_array()
         self.pixel_size = HEIGHTMAP_PIXEL
         self.hm_cols = int(round((self.bounds[0, 1] - self.bounds[0, 0]) / self.pixel_size))
         self.hm_rows = int(round((self.bounds[1, 1] - self.bounds[1, 0]) / self.pixel_size))
@@ -212,7 +213,7 @@ class CameraRig:
         self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._scene: mujoco.MjvScene | None = None
         self._gpu: dict = {}
-        self._finalizer = None
+        self._finalizer: weakref.finalize | None = None
         self._closed = False
         self._intrinsics: dict[str, np.ndarray] = {}
         for name, cid in self._cam_ids.items():
