@@ -122,7 +122,7 @@ class World:
 
     def pose(self, obj_id: int) -> Pose:
         b = self.body_of[obj_id]
-        return Pose(tuple(float(v) for v in self.data.xpos[b]), tuple(float(v) for v in self.data.xquat[b]))
+        return Pose.of(self.data.xpos[b], self.data.xquat[b])
 
     def state(self) -> SceneState:
         return SceneState(self.objects, {i: self.pose(i) for i in self.by_id}, self.time, self.suction.held)
