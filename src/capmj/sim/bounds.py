@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
@@ -23,6 +24,17 @@ class Bounds:
     ymax: float
     zmin: float = -math.inf
     zmax: float = math.inf
+
+    @classmethod
+    def of(cls, region: Bounds | Sequence[float]) -> Bounds:
+        """A ``Bounds`` itself or one from ``(xmin, xmax, ymin, ymax)``.  (Area names such as
+        "top left" are task vocabulary: :func:`capmj.tasks.spawn.region_bounds` resolves them.)"""
+        if isinstance(region, Bounds):
+            return region
+        if isinstance(region, str):
+            raise TypeError(f"Bounds.of takes numbers, not the area name {region!r}; "
+                            "use capmj.tasks.spawn.region_bounds")
+        return cls(*(float(v) for v in region))
 
     @property
     def xy(self) -> tuple[float, float, float, float]:
