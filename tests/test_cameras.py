@@ -192,7 +192,7 @@ def test_mujoco_gl_default_is_set_by_capmj_sim() -> None:
 
 
 def test_no_backend_error_names_packages(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(gl, "_chosen", None)
+    monkeypatch.setattr(gl.STATE, "chosen", None)
     monkeypatch.setattr(gl, "probe_backend", lambda b: (False, "simulated"))
     monkeypatch.delitem(sys.modules, "mujoco")
     monkeypatch.delenv("MUJOCO_GL", raising=False)
