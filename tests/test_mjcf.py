@@ -11,7 +11,8 @@ import pytest
 from capmj.resources import mjcf_path, packaged
 from capmj.sim import objects as O
 from capmj.sim.bounds import WORKSPACE
-from capmj.sim.pose import lookat_quat
+from capmj.sim.cameras import VIEW_CAMERAS
+from capmj.sim.pose import lookat_quat, mat_yaw, quat_to_mat, rotate_2d, yaw_quat
 from capmj.sim.robot import CUP_LENGTH, CUP_RADIUS
 from capmj.sim.scene import compile_scene
 
@@ -55,7 +56,7 @@ def test_code_constants_match_the_files():
 def test_perspective_cameras_look_at_the_table_centre():
     spec = mujoco.MjSpec.from_file(str(mjcf_path("table.xml")))
     views = [c for c in spec.cameras if c.proj == mujoco.mjtProjection.mjPROJ_PERSPECTIVE]
-    assert [c.name for c in views] == ["front", "left", "right"]
+    assert tuple(c.name for c in views) == VIEW_CAMERAS
     for cam in views:
         np.testing.assert_allclose(cam.quat, lookat_quat(cam.pos, WORKSPACE.center + (0.0,)), atol=1e-15)
         assert cam.fovy == pytest.approx(math.degrees(2 * math.atan(240 / 450)))
@@ -77,3 +78,11 @@ def test_composed_scene_names_and_per_object_values():
     assert model.nbody == 1 + 8 + len(specs) and model.geom("obj4_g16").id > 0
     assert {model.camera(i).name for i in range(model.ncam)} == {"front", "left", "right", "top"}
     assert model.opt.timestep == 0.002 and model.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+
+
+@pytest.mark.parametrize("yaw", [-3.0, -0.4, 0.0, 1.2, 2.9])
+def test_pose_helpers_agree(yaw):
+    mat = quat_to_mat(yaw_quat(yaw))
+    assert mat_yaw(mat) == pytest.approx(yaw)
+    np.testing.assert_allclose(rotate_2d([[1.0, 0.0], [0.3, -0.2]], yaw), [mat[:2, 0], mat[:2, :2] @ [0.3, -0.2]],
+                               atol=1e-15)

@@ -46,10 +46,11 @@ except RenderBackendError:  # importing must not fail: rendering raises it again
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL, WORKSPACE
+from capmj.sim.bounds import WORKSPACE
+from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
-"""The perspective cameras of the scene, in Ravens order."""
+"""The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal)."""
 DEPTH_BACKGROUND = 4.99
 """Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
 

@@ -19,7 +19,6 @@ from typing import Sequence
 import mujoco
 
 from capmj.errors import SimError
-from capmj.sim.bounds import WORKSPACE
 from capmj.sim.mjcf import attach_body, attach_frame_contents, load
 from capmj.sim.objects import BLOCK_MASS, FIXTURE_HEIGHT, ObjectSpec
 from capmj.sim.palette import rgba
@@ -30,7 +29,7 @@ HEIGHTMAP_CAMERA = "top"
 """The orthographic top-down camera of ``mjcf/table.xml`` (spans the workspace's width)."""
 HEIGHTMAP_PIXEL = 0.003125
 
-__all__ = ["HEIGHTMAP_CAMERA", "HEIGHTMAP_PIXEL", "WORKSPACE", "CompiledScene", "compile_scene"]
+__all__ = ["HEIGHTMAP_CAMERA", "HEIGHTMAP_PIXEL", "CompiledScene", "compile_scene"]
 
 
 @dataclass(frozen=True)
