@@ -19,7 +19,6 @@ from capmj.errors import ConfigError, RenderBackendError
 from capmj.sim import gl
 from capmj.sim.cameras import CameraRig, depth_to_visible, seg_to_visible, to_png
 from capmj.sim.objects import ObjectSpec
-from capmj.sim.scene import CAMERA_POSES
 from capmj.sim.world import World
 
 RED, BLUE, ZONE = 1, 2, 3
@@ -64,8 +63,7 @@ def _lookat_opencv(pos, target) -> np.ndarray:
 
 
 def test_bare_table_depth_matches_geometry(bare_front) -> None:
-    pos, target = map(np.array, CAMERA_POSES["front"])
-    assert np.allclose(pos, (1.0, 0.0, 0.75))
+    pos, target = np.array((1.0, 0.0, 0.75)), np.array((0.5, 0.0, 0.0))  # mjcf/table.xml "front"
     expected = np.linalg.norm(target - pos)  # the optical axis hits the table at the look-at point
     # The optical axis passes through the corner shared by the 4 central pixels.
     centre = bare_front.depth[239:241, 319:321].mean()
@@ -194,7 +192,7 @@ def test_mujoco_gl_default_is_set_by_capmj_sim() -> None:
 
 
 def test_no_backend_error_names_packages(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(gl, "_chosen", None)
+    monkeypatch.setattr(gl.STATE, "chosen", None)
     monkeypatch.setattr(gl, "probe_backend", lambda b: (False, "simulated"))
     monkeypatch.delitem(sys.modules, "mujoco")
     monkeypatch.delenv("MUJOCO_GL", raising=False)

@@ -90,6 +90,7 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     rec.text("goal", scene.goal)
     ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
     error = None
+    diags: tuple[str, ...]
     try:
         agent.act(ctx)
     except Exception as exc:  # noqa: BLE001 - recorded as this episode's failure

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import ast
 import json
-import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -30,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from capmj.errors import ConfigError
+from capmj.resources import prompts_dir
 
 __all__ = [
     "META",
@@ -47,14 +47,6 @@ QUESTION = "<<QUESTION>>"
 
 META = "#@"
 """Prefix of metadata lines in prompt files (stripped before sending)."""
-
-
-def prompts_dir() -> Path:
-    """The prompt folder: ``$CAPMJ_PROMPTS_DIR`` or ``prompts/`` of the source checkout."""
-    env = os.environ.get("CAPMJ_PROMPTS_DIR")
-    if env:
-        return Path(env)
-    return Path(__file__).resolve().parents[3] / "prompts"
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ tasks and the physics together: a failing reference episode is a bug in one of t
 
 Plans are looked up, in order: a ``reference_plan`` string attribute of the task object (plugins
 can ship their own), ``$CAPMJ_PROMPTS_DIR/reference/<task-name>.py``, then
-``prompts/reference/<task-name>.py`` in the source tree.
+``reference/<task-name>.py`` in the packaged ``prompts/`` folder.
 """
 
 from __future__ import annotations
@@ -21,10 +21,8 @@ from capmj.agents.api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.sandbox import SandboxBudget, run_code
 from capmj.errors import AgentError
+from capmj.resources import PROMPTS_ENV, packaged
 
-PROMPTS_ENV = "CAPMJ_PROMPTS_DIR"
-REPO_PROMPTS = Path(__file__).resolve().parents[3] / "prompts"
-"""``prompts/`` of the source tree (the package is installed editable)."""
 
 REFERENCE_BUDGET = SandboxBudget(wall_s=600.0, max_api_calls=2000)
 """Physics time is budgeted in simulation steps by the episode context; the wall-time limit here
@@ -37,7 +35,7 @@ def prompts_dirs() -> list[Path]:
     env = os.environ.get(PROMPTS_ENV, "").strip()
     if env:
         dirs.append(Path(env))
-    dirs.append(REPO_PROMPTS)
+    dirs.append(packaged("prompts"))
     return dirs
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import weakref
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -45,10 +46,11 @@ except RenderBackendError:  # importing must not fail: rendering raises it again
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL, WORKSPACE
+from capmj.sim.bounds import WORKSPACE
+from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
-"""The perspective cameras of the scene, in Ravens order."""
+"""The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal)."""
 DEPTH_BACKGROUND = 4.99
 """Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
 
@@ -194,7 +196,7 @@ class CameraRig:
             self._top_id = m.camera(HEIGHTMAP_CAMERA).id
         except KeyError:
             self._top_id = -1
-        self.bounds = np.array(WORKSPACE, dtype=np.float64)
+        self.bounds = WORKSPACE.as_array()
         self.pixel_size = HEIGHTMAP_PIXEL
         self.hm_cols = int(round((self.bounds[0, 1] - self.bounds[0, 0]) / self.pixel_size))
         self.hm_rows = int(round((self.bounds[1, 1] - self.bounds[1, 0]) / self.pixel_size))
@@ -212,7 +214,7 @@ class CameraRig:
         self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._scene: mujoco.MjvScene | None = None
         self._gpu: dict = {}
-        self._finalizer = None
+        self._finalizer: weakref.finalize | None = None
         self._closed = False
         self._intrinsics: dict[str, np.ndarray] = {}
         for name, cid in self._cam_ids.items():

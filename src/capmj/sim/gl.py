@@ -34,6 +34,7 @@ import os
 import subprocess
 import sys
 import weakref
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from capmj.errors import RenderBackendError
@@ -57,13 +58,25 @@ _PROBE_CODE = (
 )
 _PROBE_TIMEOUT_S = 60.0
 
-_defaulted_by_capmj = False
-_chosen: str | None = None
-_probe_results: dict[str, tuple[bool, str]] = {}
-_shared_context: Any = None
-_context_pid = -1
-_cleanups: list[weakref.finalize] = []
-_atexit_registered = False
+
+
+@dataclass
+class GLState:
+    """Everything this module remembers in a process (one instance, :data:`STATE`)."""
+
+    defaulted_by_capmj: bool = False
+    """``MUJOCO_GL`` was set by :func:`set_default_backend`, not by the user."""
+    chosen: str | None = None
+    """The backend :func:`ensure_gl_backend` settled on."""
+    probe_results: dict[str, tuple[bool, str]] = field(default_factory=dict)
+    shared_context: Any = None
+    context_pid: int = -1
+    """The process that created ``shared_context`` (a forked child must not use it)."""
+    cleanups: list[weakref.finalize] = field(default_factory=list)
+    atexit_registered: bool = False
+
+
+STATE = GLState()
 
 
 def library_loadable(backend: str) -> bool:
@@ -84,21 +97,20 @@ def set_default_backend() -> str | None:
     be loaded but libOSMesa can; leaves the variable unset when neither loads (``import mujoco``
     then still works and rendering fails later with a :class:`RenderBackendError`).
     """
-    global _defaulted_by_capmj
     if "MUJOCO_GL" in os.environ or "mujoco" in sys.modules:
         return os.environ.get("MUJOCO_GL")
     for backend in BACKENDS:
         if library_loadable(backend):
             os.environ["MUJOCO_GL"] = backend
-            _defaulted_by_capmj = True
+            STATE.defaulted_by_capmj = True
             return backend
     return None
 
 
 def probe_backend(backend: str) -> tuple[bool, str]:
     """Create a tiny GL context with ``backend`` in a subprocess; (works, reason if not).  Cached."""
-    if backend in _probe_results:
-        return _probe_results[backend]
+    if backend in STATE.probe_results:
+        return STATE.probe_results[backend]
     if not library_loadable(backend):
         result = (False, f"{_LIBRARIES[backend][0]} not found")
     else:
@@ -112,7 +124,7 @@ def probe_backend(backend: str) -> tuple[bool, str]:
             result = (ok, "" if ok else (lines[-1] if lines else f"exit code {proc.returncode}"))
         except (OSError, subprocess.TimeoutExpired) as exc:
             result = (False, f"probe failed: {exc}")
-    _probe_results[backend] = result
+    STATE.probe_results[backend] = result
     return result
 
 
@@ -183,22 +195,21 @@ def ensure_gl_backend() -> str:
     loaded directly (see :func:`_resolve_imported`).  Raises :class:`RenderBackendError` when no
     backend can work.
     """
-    global _chosen
-    if _chosen is not None:
-        return _chosen
+    if STATE.chosen is not None:
+        return STATE.chosen
     if "mujoco" in sys.modules:
-        _chosen = _resolve_imported()[0]
-        return _chosen
+        STATE.chosen = _resolve_imported()[0]
+        return STATE.chosen
     requested = os.environ.get("MUJOCO_GL", "").strip().lower()
-    if requested and not _defaulted_by_capmj:
-        _chosen = requested  # the user's explicit choice; verified when the context is created
+    if requested and not STATE.defaulted_by_capmj:
+        STATE.chosen = requested  # the user's explicit choice; verified when the context is created
         return requested
     reasons = []
     for backend in BACKENDS:
         ok, reason = probe_backend(backend)
         if ok:
             os.environ["MUJOCO_GL"] = backend
-            _chosen = backend
+            STATE.chosen = backend
             return backend
         reasons.append(f"{backend}: {reason}")
     raise RenderBackendError(f"no headless OpenGL backend works ({'; '.join(reasons)}); {INSTALL_HINT}")
@@ -217,17 +228,16 @@ def shared_gl_context() -> Any:
 
     Raises :class:`RenderBackendError` when it cannot be created.
     """
-    global _shared_context, _atexit_registered, _context_pid
-    if _shared_context is not None and _context_pid != os.getpid():
+    if STATE.shared_context is not None and STATE.context_pid != os.getpid():
         # Measured: with Mesa (llvmpipe, EGL and OSMesa) a child forked after its parent made a GL
         # context hangs forever in its first GL call, even with a fresh context.  Fail instead.
         raise RenderBackendError(
             "this process was forked after its parent created an OpenGL context; Mesa cannot render "
             "in such a child (it deadlocks). Start rendering workers with multiprocessing's 'spawn' or "
             "'forkserver' method, or do not render in the parent before forking.")
-    if _shared_context is not None:
-        _shared_context.make_current()
-        return _shared_context
+    if STATE.shared_context is not None:
+        STATE.shared_context.make_current()
+        return STATE.shared_context
     backend = ensure_gl_backend()
     try:
         import mujoco  # noqa: F401
@@ -239,20 +249,20 @@ def shared_gl_context() -> Any:
         ctx.make_current()
     except Exception as exc:
         raise _context_failure(backend, exc) from exc
-    _shared_context = ctx
-    _context_pid = os.getpid()
-    if not _atexit_registered:
+    STATE.shared_context = ctx
+    STATE.context_pid = os.getpid()
+    if not STATE.atexit_registered:
         atexit.register(release_gl)  # runs before mujoco.egl's eglTerminate (registered earlier)
-        _atexit_registered = True
+        STATE.atexit_registered = True
     return ctx
 
 
 def make_current() -> bool:
     """Make the shared context current if this process owns one; False otherwise (no GL call made)."""
-    if _shared_context is None or _context_pid != os.getpid():
+    if STATE.shared_context is None or STATE.context_pid != os.getpid():
         return False
     try:
-        _shared_context.make_current()
+        STATE.shared_context.make_current()
         return True
     except Exception:  # pragma: no cover - best effort
         return False
@@ -266,30 +276,29 @@ def register_cleanup(owner: object, fn: Callable[..., None], *args: Any) -> weak
     """
     fin = weakref.finalize(owner, fn, *args)
     fin.atexit = False  # release_gl() runs it in the right order instead
-    _cleanups[:] = [f for f in _cleanups if f.alive]
-    _cleanups.append(fin)
+    STATE.cleanups[:] = [f for f in STATE.cleanups if f.alive]
+    STATE.cleanups.append(fin)
     return fin
 
 
 def release_gl() -> None:
     """Free every registered GPU resource, then the shared context (idempotent; run at exit)."""
-    global _shared_context
-    if _context_pid != os.getpid():
+    if STATE.context_pid != os.getpid():
         return  # a forked child must not free its parent's GL objects
-    ctx = _shared_context
+    ctx = STATE.shared_context
     if ctx is not None:
         try:
             ctx.make_current()
         except Exception:  # pragma: no cover - best effort at shutdown
             pass
-    while _cleanups:
-        fin = _cleanups.pop()
+    while STATE.cleanups:
+        fin = STATE.cleanups.pop()
         try:
             fin()
         except Exception:  # pragma: no cover - best effort at shutdown
             pass
     if ctx is not None:
-        _shared_context = None
+        STATE.shared_context = None
         try:
             ctx.free()
         except Exception:  # pragma: no cover

@@ -108,7 +108,8 @@ class ObjectSpec:
         """A copy at another pose (used by scene generators while sampling)."""
         from dataclasses import replace
 
-        return replace(self, pos=tuple(float(v) for v in pos), yaw=self.yaw if yaw is None else float(yaw))
+        x, y, z = (float(v) for v in pos)
+        return replace(self, pos=(x, y, z), yaw=self.yaw if yaw is None else float(yaw))
 
 
 def resting_z(kind: str, size: str | None = None, scale: float = 1.0) -> float:

@@ -8,7 +8,9 @@ Changes applied in the spec (the files stay untouched):
 - ``gravcomp = 1`` on the arm links: the Menagerie position servos have no gravity feed-forward,
   and without it the shoulder sags by ~1 cm under load, far above our 5 mm placement budget.
 - the ``home`` keyframe is removed, because adding free bodies changes ``nq``.
-- a suction tool (cup cylinder + ``suction_tip`` site) is attached at ``attachment_site``.
+- the Menagerie spotlight is removed (it over-exposes the top camera; ``mjcf/table.xml`` lights).
+- the suction tool of ``mjcf/suction.xml`` (cup cylinder + ``suction_tip`` site) is attached at
+  ``attachment_site``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from pathlib import Path
 import mujoco
 
 from capmj.errors import SimError
+from capmj.sim.mjcf import attach_body, load
 
 ARM_JOINTS: tuple[str, ...] = (
     "shoulder_pan_joint",
@@ -40,9 +43,11 @@ SUCTION_BODY = "suction"
 SUCTION_CUP_GEOM = "suction_cup"
 SUCTION_TIP_SITE = "suction_tip"
 CUP_RADIUS = 0.012
+"""Radius (m) of the cup geom of ``mjcf/suction.xml`` (kept equal to it; tested)."""
 CUP_LENGTH = 0.16
-"""Flange-to-tip length (m): long enough that the wrist links (which sit ~0.1 m above and
-beside the flange) pass over a 6-block tower next to the pick or place point."""
+"""Flange-to-tip length (m) of ``mjcf/suction.xml`` (kept equal to it; tested): long enough that the
+wrist links (which sit ~0.1 m above and beside the flange) pass over a 6-block tower next to the
+pick or place point."""
 
 HOME_QPOS: tuple[float, ...] = (-3.1416, -1.9, 1.9, -1.5708, -1.5708, 0.0)
 """Joint-space home: arm folded over the rear of the base, tool down, out of the front camera."""
@@ -71,26 +76,9 @@ def load_arm_spec() -> mujoco.MjSpec:
         spec.delete(key)
     for name in ARM_BODIES:
         spec.body(name).gravcomp = 1.0
+    for light in list(spec.lights):  # the Menagerie spotlight over-exposes the top camera
+        spec.delete(light)
     site = spec.site("attachment_site")
-    tool = spec.body("wrist_3_link").add_body(name=SUCTION_BODY, pos=site.pos, quat=site.quat)
-    tool.add_geom(
-        name="suction_mount",
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=[0.025, 0.01, 0],
-        pos=[0, 0, 0.01],
-        rgba=[0.2, 0.2, 0.2, 1],
-        contype=0,
-        conaffinity=0,
-        mass=0.05,
-    )
-    tool.add_geom(
-        name=SUCTION_CUP_GEOM,
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=[CUP_RADIUS, (CUP_LENGTH - 0.02) / 2, 0],
-        pos=[0, 0, 0.02 + (CUP_LENGTH - 0.02) / 2],
-        rgba=[0.1, 0.1, 0.1, 1],
-        mass=0.05,
-        friction=[1.0, 0.005, 0.0001],
-    )
-    tool.add_site(name=SUCTION_TIP_SITE, pos=[0, 0, CUP_LENGTH], size=[0.004, 0, 0], rgba=[1, 0, 0, 0.5])
+    attach_body(spec.body("wrist_3_link"), load("suction.xml"), "tool", f"{SUCTION_BODY}_", SUCTION_BODY,
+                pos=site.pos, quat=site.quat)
     return spec

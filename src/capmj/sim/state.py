@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 
 from capmj.sim.objects import ObjectSpec
+from capmj.sim.pose import mat_yaw, quat_to_mat, yaw_quat
 
 
 @dataclass(frozen=True)
@@ -23,22 +24,21 @@ class Pose:
     pos: tuple[float, float, float]
     quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
 
+    @classmethod
+    def of(cls, pos: Sequence[float], quat: Sequence[float]) -> Pose:
+        """A pose from any sequences (numpy rows included), stored as plain float tuples."""
+        x, y, z = (float(v) for v in pos)
+        w, qx, qy, qz = (float(v) for v in quat)
+        return cls((x, y, z), (w, qx, qy, qz))
+
     @property
     def rotation(self) -> np.ndarray:
-        w, x, y, z = self.quat
-        return np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-            ]
-        )
+        return quat_to_mat(self.quat)
 
     @property
     def yaw(self) -> float:
         """Rotation about world z of the body x axis (meaningful for upright objects)."""
-        r = self.rotation
-        return math.atan2(r[1, 0], r[0, 0])
+        return mat_yaw(self.rotation)
 
     @property
     def tilt(self) -> float:
@@ -86,5 +86,5 @@ class SceneState:
     def from_specs(cls, objects: tuple[ObjectSpec, ...] | list[ObjectSpec]) -> "SceneState":
         """The state in which every object sits at its spec pose (a scene's initial layout)."""
         objs = tuple(objects)
-        poses = {o.obj_id: Pose(o.pos, (math.cos(o.yaw / 2), 0.0, 0.0, math.sin(o.yaw / 2))) for o in objs}
+        poses = {o.obj_id: Pose.of(o.pos, yaw_quat(o.yaw)) for o in objs}
         return cls(objs, poses)

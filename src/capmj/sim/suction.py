@@ -8,57 +8,79 @@ have no weld, so they can never be picked.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Mapping
 
 import mujoco
 import numpy as np
 
-if TYPE_CHECKING:
-    from capmj.sim.world import World
+CUP = -1
+"""Owner id :func:`contact_owners` reports for the suction cup."""
+
+
+def contact_owners(data: mujoco.MjData, geom_obj: np.ndarray, cup_geom: int, obj_id: int) -> set[int]:
+    """Ids of what touches object ``obj_id``: other object ids, 0 for table/floor/robot, ``CUP`` for the cup."""
+    geoms = data.contact.geom[: data.ncon]
+    if not len(geoms):
+        return set()
+    owners = geom_obj[geoms]
+    out: set[int] = set()
+    for col, other in ((0, 1), (1, 0)):
+        rows = owners[:, col] == obj_id
+        if rows.any():
+            out.update(int(geom_obj[g]) if g != cup_geom else CUP for g in geoms[rows, other])
+    return out
 
 
 class Suction:
-    def __init__(self, world: "World") -> None:
-        self.world = world
-        self.held: int | None = None
-        self._suction_body = world.model.body("suction").id
-        self._movable = frozenset(world.movable_ids)
+    """The suction cup of one world.  It holds no state of its own: what is held is read from the
+    active welds, so restoring a physics snapshot restores the grip too.
 
-    def sync(self) -> None:
-        """Re-derive ``held`` from the active welds (after a state restore)."""
-        d = self.world.data
-        self.held = next((i for i, e in self.world.weld_of.items() if d.eq_active[e]), None)
+    ``geom_obj`` maps every geom to its object id (0 for robot, table, floor), ``body_of`` and
+    ``weld_of`` map movable object ids to their body and weld equality.
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, *, suction_body: int, cup_geom: int,
+                 geom_obj: np.ndarray, body_of: Mapping[int, int], weld_of: Mapping[int, int]) -> None:
+        self.model, self.data = model, data
+        self._suction_body, self._cup = suction_body, cup_geom
+        self._geom_obj, self._body_of, self._weld_of = geom_obj, body_of, weld_of
+        self._movable = frozenset(weld_of)
+
+    @property
+    def held(self) -> int | None:
+        """The object whose weld is active, if any."""
+        active = self.data.eq_active
+        return next((i for i, e in self._weld_of.items() if active[e]), None)
 
     def touching(self) -> int | None:
         """The movable object the cup touches, if any (lowest obj_id when several).
 
         Called every physics step during descents, so it scans the contact list once.
         """
-        w = self.world
-        d = w.data
+        d = self.data
         if d.ncon == 0:
             return None
         geoms = d.contact.geom[: d.ncon]
-        cup = w.cup_geom
+        cup = self._cup
         rows = (geoms[:, 0] == cup) | (geoms[:, 1] == cup)
         if not rows.any():
             return None
         pairs = geoms[rows]
-        owners = w.geom_obj[np.where(pairs[:, 0] == cup, pairs[:, 1], pairs[:, 0])]
+        owners = self._geom_obj[np.where(pairs[:, 0] == cup, pairs[:, 1], pairs[:, 0])]
         movable = [int(o) for o in owners if o in self._movable]
         return min(movable) if movable else None
 
     def grip(self) -> int | None:
         """Activate the weld of the touched movable object; returns its id or None."""
-        if self.held is not None:
-            return self.held
+        held = self.held
+        if held is not None:
+            return held
         obj = self.touching()
         if obj is None:
             return None
-        w = self.world
-        m, d = w.model, w.data
-        eq = w.weld_of[obj]
-        b1, b2 = self._suction_body, w.body_of[obj]
+        m, d = self.model, self.data
+        eq = self._weld_of[obj]
+        b1, b2 = self._suction_body, self._body_of[obj]
         r1 = d.xmat[b1].reshape(3, 3)
         q1inv = np.zeros(4)
         mujoco.mju_negQuat(q1inv, d.xquat[b1])
@@ -68,19 +90,18 @@ class Suction:
         m.eq_data[eq, 3:6] = r1.T @ (d.xpos[b2] - d.xpos[b1])
         m.eq_data[eq, 6:10] = relq
         d.eq_active[eq] = 1
-        self.held = obj
         return obj
 
     def release(self) -> int | None:
         """Deactivate the weld; returns the id that was held."""
         obj = self.held
         if obj is not None:
-            self.world.data.eq_active[self.world.weld_of[obj]] = 0
-        self.held = None
+            self.data.eq_active[self._weld_of[obj]] = 0
         return obj
 
     def held_touches_other(self) -> bool:
         """True when the held object touches anything but the cup (placing is detected this way)."""
-        if self.held is None:
+        held = self.held
+        if held is None:
             return False
-        return bool(self.world.contacts_of(self.held) - {-1})
+        return bool(contact_owners(self.data, self._geom_obj, self._cup, held) - {CUP})

@@ -14,9 +14,10 @@ import mujoco
 import numpy as np
 
 from capmj.sim.objects import ObjectSpec
-from capmj.sim.robot import ARM_JOINTS, HOME_QPOS, SUCTION_CUP_GEOM, SUCTION_TIP_SITE
+from capmj.sim.robot import ARM_JOINTS, HOME_QPOS, SUCTION_BODY, SUCTION_CUP_GEOM, SUCTION_TIP_SITE
 from capmj.sim.scene import compile_scene
 from capmj.sim.state import Pose, SceneState
+from capmj.sim.suction import Suction, contact_owners
 
 FrameListener = Callable[["World"], None]
 
@@ -61,9 +62,8 @@ class World:
         self._listeners: list[tuple[FrameListener, int]] = []
         self.set_arm(np.array(HOME_QPOS))
         mujoco.mj_forward(m, self.data)
-        from capmj.sim.suction import Suction
-
-        self.suction = Suction(self)
+        self.suction = Suction(m, self.data, suction_body=m.body(SUCTION_BODY).id, cup_geom=self.cup_geom,
+                               geom_obj=self.geom_obj, body_of=self.body_of, weld_of=self.weld_of)
 
     @property
     def xml(self) -> str:
@@ -122,7 +122,7 @@ class World:
 
     def pose(self, obj_id: int) -> Pose:
         b = self.body_of[obj_id]
-        return Pose(tuple(float(v) for v in self.data.xpos[b]), tuple(float(v) for v in self.data.xquat[b]))
+        return Pose.of(self.data.xpos[b], self.data.xquat[b])
 
     def state(self) -> SceneState:
         return SceneState(self.objects, {i: self.pose(i) for i in self.by_id}, self.time, self.suction.held)
@@ -144,18 +144,7 @@ class World:
 
     def contacts_of(self, obj_id: int) -> set[int]:
         """Ids of what touches an object: other object ids, 0 for table/floor/robot, -1 for the cup."""
-        d = self.data
-        geoms = d.contact.geom[: d.ncon]
-        if not len(geoms):
-            return set()
-        owners = self.geom_obj[geoms]
-        out: set[int] = set()
-        for col, other in ((0, 1), (1, 0)):
-            rows = owners[:, col] == obj_id
-            if rows.any():
-                others = geoms[rows, other]
-                out.update(int(self.geom_obj[g]) if g != self.cup_geom else -1 for g in others)
-        return out
+        return contact_owners(self.data, self.geom_obj, self.cup_geom, obj_id)
 
     # ------------------------------------------------------------------ reset
     def snapshot(self) -> WorldSnapshot:
@@ -170,4 +159,3 @@ class World:
         self.model.eq_data[:] = snap.eq_data
         self.steps = snap.steps
         mujoco.mj_forward(self.model, self.data)
-        self.suction.sync()

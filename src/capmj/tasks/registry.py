@@ -64,13 +64,6 @@ class _Scan:
     clashes: dict[str, PluginError] = field(default_factory=dict)
 
 
-_lock = threading.RLock()
-_scan_cache: _Scan | None = None
-_registered: dict[str, tuple[TaskInfo, "Task"]] = {}
-_loaded: dict[str, "Task"] = {}
-_failed: dict[str, PluginError] = {}
-
-
 def plugins_disabled() -> bool:
     """Whether ``CAPMJ_DISABLE_PLUGINS`` is set to a true value (read on every call)."""
     return os.environ.get(DISABLE_ENV, "").strip().lower() in {"1", "true", "yes", "on"}
@@ -80,40 +73,6 @@ def _info(ep: metadata.EntryPoint) -> TaskInfo:
     dist = getattr(ep, "dist", None)
     name = (dist.metadata["Name"] or "<unknown>") if dist is not None else "<unknown>"
     return TaskInfo(ep.name, name, dist.version if dist is not None else "?", ep.value)
-
-
-def _scan() -> _Scan:
-    """The entry points of the group, read once (metadata only); empty when plugins are off."""
-    global _scan_cache
-    if plugins_disabled():
-        return _Scan()
-    with _lock:
-        if _scan_cache is None:
-            by_name: dict[str, list[metadata.EntryPoint]] = {}
-            for ep in metadata.entry_points(group=GROUP):
-                by_name.setdefault(ep.name, []).append(ep)
-            scan = _Scan()
-            for name, eps in sorted(by_name.items()):
-                if len(eps) == 1:
-                    scan.entries[name], scan.points[name] = _info(eps[0]), eps[0]
-                    continue
-                who = ", ".join(f"{i.distribution} {i.version} ({i.value})" for i in map(_info, eps))
-                scan.clashes[name] = PluginError(
-                    f"task name {name!r} is declared by more than one distribution: {who}; "
-                    "it is unusable until all but one are uninstalled")
-            _scan_cache = scan
-        return _scan_cache
-
-
-def list_tasks() -> list[TaskInfo]:
-    """Every usable task name, sorted, with its provider; imports no plugin.
-
-    Names declared by two distributions are left out (they are in :func:`broken`).
-    """
-    with _lock:
-        found = dict(_scan().entries)
-        found.update({n: info for n, (info, _) in _registered.items()})
-        return [found[n] for n in sorted(found)]
 
 
 def validate_task(task: Any, name: str | None = None) -> list[str]:
@@ -149,156 +108,237 @@ def _instantiate(obj: Any) -> Any:
     return obj
 
 
-def _unknown(name: str) -> ConfigError:
-    valid = [i.name for i in list_tasks()]
-    close = difflib.get_close_matches(name, valid, n=3, cutoff=0.75)
-    hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
-    off = f" (entry-point plugins are disabled by {DISABLE_ENV})" if plugins_disabled() else ""
-    return ConfigError(f"unknown task {name!r}{hint}; valid tasks{off}: {', '.join(valid) or 'none'}")
-
-
-def get_task(name: str) -> "Task":
-    """The task called ``name``: imports only its plugin, validates and caches it.
-
-    Raises :class:`ConfigError` for an unknown name and :class:`PluginError` when the plugin fails
-    to import or validate or its name is declared twice.
-    """
-    with _lock:
-        if name in _registered:
-            return _registered[name][1]
-        scan = _scan()
-        if name in scan.clashes:
-            raise scan.clashes[name]
-        if name not in scan.entries:
-            raise _unknown(name)
-        if name in _loaded:
-            return _loaded[name]
-        if name in _failed:
-            raise _failed[name]
-        info = scan.entries[name]
-        where = f"task plugin {name!r} from {info.distribution} {info.version} ({info.value})"
-        try:
-            task = _instantiate(scan.points[name].load())
-        except Exception as e:  # anything a foreign module raises at import must stay contained
-            _failed[name] = PluginError(f"{where} failed to load: {type(e).__name__}: {e}")
-            raise _failed[name] from e
-        problems = validate_task(task, name)
-        if problems:
-            _failed[name] = PluginError(f"{where} is not a valid task: {'; '.join(problems)}")
-            raise _failed[name]
-        _loaded[name] = task
-        return task
-
-
-def register(task: "Task", *, replace: bool = False) -> "Task":
-    """Add a task by hand (tests, notebooks); works with plugins disabled.  Returns ``task``.
-
-    The task is validated like a plugin.  A name that already exists raises :class:`PluginError`
-    unless ``replace`` is true, in which case this task shadows the other one.
-    """
-    problems = validate_task(task)
-    if problems:
-        raise PluginError(f"cannot register {getattr(task, 'name', task)!r}: {'; '.join(problems)}")
-    with _lock:
-        scan = _scan()
-        if not replace and (task.name in _registered or task.name in scan.entries or task.name in scan.clashes):
-            raise PluginError(f"a task named {task.name!r} already exists; pass replace=True to shadow it")
-        value = f"{type(task).__module__}:{type(task).__qualname__}"
-        _registered[task.name] = (TaskInfo(task.name, REGISTERED, "", value), task)
-    return task
-
-
-def tags_of(name: str) -> frozenset[str]:
-    """The tags of task ``name`` (imports its plugin)."""
-    return frozenset(get_task(name).tags)
-
-
-def broken(load: bool = False) -> dict[str, PluginError]:
-    """Tasks known to be unusable, by name: clashing names, and plugins that failed to load.
-
-    Only plugins someone tried to load are known to fail; ``load=True`` tries them all first.
-    """
-    with _lock:
-        if load:
-            for info in list_tasks():
-                try:
-                    get_task(info.name)
-                except PluginError:
-                    pass
-        scan = _scan()
-        out = {n: e for n, e in scan.clashes.items() if n not in _registered}
-        out.update({n: e for n, e in _failed.items() if n in scan.entries and n not in _registered})
-        return dict(sorted(out.items()))
-
-
 def _tokens(selector: str | Sequence[str]) -> list[str]:
     parts = [selector] if isinstance(selector, str) else list(selector)
     return [t.strip() for p in parts for t in str(p).split(",") if t.strip()]
 
 
-def resolve(selector: str | Sequence[str]) -> list[str]:
-    """Expand task names, tags and ``all`` (comma-separated and/or a list) to task names.
+class TaskRegistry:
+    """Tasks by name: the entry points of :data:`GROUP` (scanned once, loaded one by one on
+    demand) plus tasks added with :meth:`register`.  Thread-safe.
 
-    The result keeps the selector's order, drops repeats, and sorts the names within one ``all``
-    or tag.  A name counts before a tag of the same spelling.  Names and ``all`` need metadata
-    only (a plugin that fails to import then fails at :func:`get_task`, per episode).  Tags need
-    the task objects, so resolving a tag imports the plugins; those that fail are skipped and
-    listed by :func:`broken` instead of failing the whole selection.  Unknown entries raise
-    :class:`ConfigError` naming the valid names and tags.
+    The module functions (:func:`get_task`, :func:`resolve`…) act on :data:`DEFAULT`; a separate
+    instance gives a test or a tool its own view without touching the process-wide one.
     """
-    tokens = _tokens(selector)
-    if not tokens:
-        raise ConfigError("empty task selection; give task names, tags or 'all'")
-    names = [i.name for i in list_tasks()]
-    known = set(names) | set(_scan().clashes)
-    index: dict[str, frozenset[str]] = {}
 
-    def tag_index() -> dict[str, frozenset[str]]:
-        """Tags of every loadable task, built on first need (imports the plugins)."""
-        if not index:
-            for n in names:
-                try:
-                    index[n] = tags_of(n)
-                except PluginError:
-                    pass  # recorded in broken()
-        return index
+    def __init__(self, group: str = GROUP) -> None:
+        self.group = group
+        self._lock = threading.RLock()
+        self._scan_cache: _Scan | None = None
+        self._registered: dict[str, tuple[TaskInfo, Task]] = {}
+        self._loaded: dict[str, Task] = {}
+        self._failed: dict[str, PluginError] = {}
 
-    out: list[str] = []
-    unknown: list[str] = []
-    for tok in tokens:
-        if tok == "all":
-            picked = names
-        elif tok in known:
-            picked = [tok]
-        else:
-            picked = [n for n, tags in tag_index().items() if tok in tags]
-            if not picked:
-                unknown.append(tok)
-        out.extend(n for n in picked if n not in out)
-    if unknown:
-        tags = sorted({t for ts in tag_index().values() for t in ts})
-        close = difflib.get_close_matches(unknown[0], names + tags, n=3, cutoff=0.6)
+    def _scan(self) -> _Scan:
+        """The entry points of the group, read once (metadata only); empty when plugins are off."""
+        if plugins_disabled():
+            return _Scan()
+        with self._lock:
+            if self._scan_cache is None:
+                by_name: dict[str, list[metadata.EntryPoint]] = {}
+                for ep in metadata.entry_points(group=self.group):
+                    by_name.setdefault(ep.name, []).append(ep)
+                scan = _Scan()
+                for name, eps in sorted(by_name.items()):
+                    if len(eps) == 1:
+                        scan.entries[name], scan.points[name] = _info(eps[0]), eps[0]
+                        continue
+                    who = ", ".join(f"{i.distribution} {i.version} ({i.value})" for i in map(_info, eps))
+                    scan.clashes[name] = PluginError(
+                        f"task name {name!r} is declared by more than one distribution: {who}; "
+                        "it is unusable until all but one are uninstalled")
+                self._scan_cache = scan
+            return self._scan_cache
+
+    def list_tasks(self) -> list[TaskInfo]:
+        """Every usable task name, sorted, with its provider; imports no plugin.
+
+        Names declared by two distributions are left out (they are in :meth:`broken`).
+        """
+        with self._lock:
+            found = dict(self._scan().entries)
+            found.update({n: info for n, (info, _) in self._registered.items()})
+            return [found[n] for n in sorted(found)]
+
+    def _unknown(self, name: str) -> ConfigError:
+        valid = [i.name for i in self.list_tasks()]
+        close = difflib.get_close_matches(name, valid, n=3, cutoff=0.75)
         hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
-        bad = broken()
-        failed = f"; unusable plugins: {', '.join(bad)}" if bad else ""
-        raise ConfigError(f"unknown task or tag {', '.join(map(repr, unknown))}{hint}; valid tasks: "
-                          f"{', '.join(names) or 'none'}; valid tags: {', '.join(tags) or 'none'}; or 'all'{failed}")
-    return out
+        off = f" (entry-point plugins are disabled by {DISABLE_ENV})" if plugins_disabled() else ""
+        return ConfigError(f"unknown task {name!r}{hint}; valid tasks{off}: {', '.join(valid) or 'none'}")
+
+    def get_task(self, name: str) -> Task:
+        """The task called ``name``: imports only its plugin, validates and caches it.
+
+        Raises :class:`ConfigError` for an unknown name and :class:`PluginError` when the plugin
+        fails to import or validate or its name is declared twice.
+        """
+        with self._lock:
+            if name in self._registered:
+                return self._registered[name][1]
+            scan = self._scan()
+            if name in scan.clashes:
+                raise scan.clashes[name]
+            if name not in scan.entries:
+                raise self._unknown(name)
+            if name in self._loaded:
+                return self._loaded[name]
+            if name in self._failed:
+                raise self._failed[name]
+            info = scan.entries[name]
+            where = f"task plugin {name!r} from {info.distribution} {info.version} ({info.value})"
+            try:
+                task = _instantiate(scan.points[name].load())
+            except Exception as e:  # anything a foreign module raises at import must stay contained
+                self._failed[name] = PluginError(f"{where} failed to load: {type(e).__name__}: {e}")
+                raise self._failed[name] from e
+            problems = validate_task(task, name)
+            if problems:
+                self._failed[name] = PluginError(f"{where} is not a valid task: {'; '.join(problems)}")
+                raise self._failed[name]
+            self._loaded[name] = task
+            return task
+
+    def register(self, task: Task, *, replace: bool = False) -> Task:
+        """Add a task by hand (tests, notebooks); works with plugins disabled.  Returns ``task``.
+
+        The task is validated like a plugin.  A name that already exists raises
+        :class:`PluginError` unless ``replace`` is true, in which case this task shadows the other.
+        """
+        problems = validate_task(task)
+        if problems:
+            raise PluginError(f"cannot register {getattr(task, 'name', task)!r}: {'; '.join(problems)}")
+        with self._lock:
+            scan = self._scan()
+            taken = task.name in self._registered or task.name in scan.entries or task.name in scan.clashes
+            if not replace and taken:
+                raise PluginError(f"a task named {task.name!r} already exists; pass replace=True to shadow it")
+            value = f"{type(task).__module__}:{type(task).__qualname__}"
+            self._registered[task.name] = (TaskInfo(task.name, REGISTERED, "", value), task)
+        return task
+
+    def tags_of(self, name: str) -> frozenset[str]:
+        """The tags of task ``name`` (imports its plugin)."""
+        return frozenset(self.get_task(name).tags)
+
+    def broken(self, load: bool = False) -> dict[str, PluginError]:
+        """Tasks known to be unusable, by name: clashing names, and plugins that failed to load.
+
+        Only plugins someone tried to load are known to fail; ``load=True`` tries them all first.
+        """
+        with self._lock:
+            if load:
+                for info in self.list_tasks():
+                    try:
+                        self.get_task(info.name)
+                    except PluginError:
+                        pass
+            scan = self._scan()
+            out = {n: e for n, e in scan.clashes.items() if n not in self._registered}
+            out.update({n: e for n, e in self._failed.items() if n in scan.entries and n not in self._registered})
+            return dict(sorted(out.items()))
+
+    def resolve(self, selector: str | Sequence[str]) -> list[str]:
+        """Expand task names, tags and ``all`` (comma-separated and/or a list) to task names.
+
+        The result keeps the selector's order, drops repeats, and sorts the names within one
+        ``all`` or tag.  A name counts before a tag of the same spelling.  Names and ``all`` need
+        metadata only (a plugin that fails to import then fails at :meth:`get_task`, per
+        episode).  Tags need the task objects, so resolving a tag imports the plugins; those that
+        fail are skipped and listed by :meth:`broken` instead of failing the whole selection.
+        Unknown entries raise :class:`ConfigError` naming the valid names and tags.
+        """
+        tokens = _tokens(selector)
+        if not tokens:
+            raise ConfigError("empty task selection; give task names, tags or 'all'")
+        names = [i.name for i in self.list_tasks()]
+        known = set(names) | set(self._scan().clashes)
+        index: dict[str, frozenset[str]] = {}
+
+        def tag_index() -> dict[str, frozenset[str]]:
+            """Tags of every loadable task, built on first need (imports the plugins)."""
+            if not index:
+                for n in names:
+                    try:
+                        index[n] = self.tags_of(n)
+                    except PluginError:
+                        pass  # recorded in broken()
+            return index
+
+        out: list[str] = []
+        unknown: list[str] = []
+        for tok in tokens:
+            if tok == "all":
+                picked = names
+            elif tok in known:
+                picked = [tok]
+            else:
+                picked = [n for n, tags in tag_index().items() if tok in tags]
+                if not picked:
+                    unknown.append(tok)
+            out.extend(n for n in picked if n not in out)
+        if unknown:
+            tags = sorted({t for ts in tag_index().values() for t in ts})
+            close = difflib.get_close_matches(unknown[0], names + tags, n=3, cutoff=0.6)
+            hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+            bad = self.broken()
+            failed = f"; unusable plugins: {', '.join(bad)}" if bad else ""
+            raise ConfigError(f"unknown task or tag {', '.join(map(repr, unknown))}{hint}; valid tasks: "
+                              f"{', '.join(names) or 'none'}; valid tags: {', '.join(tags) or 'none'}; "
+                              f"or 'all'{failed}")
+        return out
+
+    def reset(self) -> None:
+        """Forget discovered entry points, loaded and registered tasks (e.g. after installing a
+        package in a running process)."""
+        with self._lock:
+            self._scan_cache = None
+            self._registered.clear()
+            self._loaded.clear()
+            self._failed.clear()
+        importlib.invalidate_caches()
+
+
+DEFAULT = TaskRegistry()
+"""The process-wide registry the module functions below use."""
+
+
+def list_tasks() -> list[TaskInfo]:
+    """:meth:`TaskRegistry.list_tasks` of :data:`DEFAULT`."""
+    return DEFAULT.list_tasks()
+
+
+def get_task(name: str) -> Task:
+    """:meth:`TaskRegistry.get_task` of :data:`DEFAULT`."""
+    return DEFAULT.get_task(name)
+
+
+def register(task: Task, *, replace: bool = False) -> Task:
+    """:meth:`TaskRegistry.register` on :data:`DEFAULT`."""
+    return DEFAULT.register(task, replace=replace)
+
+
+def tags_of(name: str) -> frozenset[str]:
+    """:meth:`TaskRegistry.tags_of` of :data:`DEFAULT`."""
+    return DEFAULT.tags_of(name)
+
+
+def broken(load: bool = False) -> dict[str, PluginError]:
+    """:meth:`TaskRegistry.broken` of :data:`DEFAULT`."""
+    return DEFAULT.broken(load)
+
+
+def resolve(selector: str | Sequence[str]) -> list[str]:
+    """:meth:`TaskRegistry.resolve` on :data:`DEFAULT`."""
+    return DEFAULT.resolve(selector)
 
 
 def reset() -> None:
-    """Forget discovered entry points, loaded and registered tasks (e.g. after installing a
-    package in a running process)."""
-    global _scan_cache
-    with _lock:
-        _scan_cache = None
-        _registered.clear()
-        _loaded.clear()
-        _failed.clear()
-    importlib.invalidate_caches()
+    """:meth:`TaskRegistry.reset` of :data:`DEFAULT`."""
+    DEFAULT.reset()
 
 
 __all__ = [
-    "DISABLE_ENV", "DOC_PARTS", "GROUP", "REGISTERED", "TaskInfo", "broken", "get_task", "list_tasks",
+    "DEFAULT", "DISABLE_ENV", "DOC_PARTS", "GROUP", "REGISTERED", "TaskInfo", "TaskRegistry", "broken", "get_task", "list_tasks",
     "plugins_disabled", "register", "reset", "resolve", "tags_of", "validate_task",
 ]

@@ -15,14 +15,14 @@ All randomness comes from the generator passed in, so a seed gives the same scen
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Iterable, Sequence
 
 import numpy as np
 
+from capmj.sim.bounds import WORKSPACE, Bounds
 from capmj.sim.objects import ObjectSpec, resting_z
 from capmj.sim.palette import COOL, WARM
-from capmj.tasks.predicates import WORKSPACE_X, WORKSPACE_Y, area_bounds
+from capmj.tasks.predicates import area_bounds
 from capmj.tasks.protocol import Resample
 
 GAP = 0.01
@@ -42,47 +42,13 @@ WARM_COLORS: tuple[str, ...] = tuple(c for c in DEFAULT_COLORS if c in WARM)
 COOL_COLORS: tuple[str, ...] = tuple(c for c in DEFAULT_COLORS if c in COOL)
 
 
-@dataclass(frozen=True)
-class Bounds:
-    """An axis-aligned rectangle of the table, ``xmin ≤ x ≤ xmax``, ``ymin ≤ y ≤ ymax`` (m)."""
-
-    xmin: float
-    xmax: float
-    ymin: float
-    ymax: float
-
-    @classmethod
-    def of(cls, region: "str | Bounds | Sequence[float]") -> "Bounds":
-        """From an area name ("top left"…, see :func:`predicates.area_bounds`), a ``Bounds`` or
-        ``(xmin, xmax, ymin, ymax)``."""
-        if isinstance(region, Bounds):
-            return region
-        if isinstance(region, str):
-            return cls(*area_bounds(region))
-        return cls(*(float(v) for v in region))
-
-    def shrink(self, m: float) -> "Bounds":
-        return Bounds(self.xmin + m, self.xmax - m, self.ymin + m, self.ymax - m)
-
-    def intersect(self, other: "Bounds") -> "Bounds":
-        return Bounds(max(self.xmin, other.xmin), min(self.xmax, other.xmax),
-                      max(self.ymin, other.ymin), min(self.ymax, other.ymax))
-
-    @property
-    def empty(self) -> bool:
-        return self.xmin > self.xmax or self.ymin > self.ymax
-
-    def contains(self, x, y, margin: float = 0.0):
-        """Whether (x, y) lies inside the rectangle grown by ``margin``; works on arrays."""
-        return ((x >= self.xmin - margin) & (x <= self.xmax + margin)
-                & (y >= self.ymin - margin) & (y <= self.ymax + margin))
-
-    @property
-    def center(self) -> tuple[float, float]:
-        return ((self.xmin + self.xmax) / 2, (self.ymin + self.ymax) / 2)
+def region_bounds(region: str | Bounds | Sequence[float]) -> Bounds:
+    """From an area name ("top left"…, see :func:`predicates.area_bounds`), a ``Bounds`` or
+    ``(xmin, xmax, ymin, ymax)``."""
+    return Bounds(*area_bounds(region)) if isinstance(region, str) else Bounds.of(region)
 
 
-WORKSPACE_BOUNDS = Bounds(WORKSPACE_X[0], WORKSPACE_X[1], WORKSPACE_Y[0], WORKSPACE_Y[1])
+WORKSPACE_BOUNDS = WORKSPACE
 SPAWN_BOUNDS = Bounds(0.3, 0.7, -0.4, 0.4)
 """Default region for object centres (reachable part of the workspace)."""
 
@@ -147,10 +113,10 @@ class Spawner:
         """A free centre for a footprint of ``radius``; raises ``Resample`` after ``tries``."""
         b = centre_bounds(radius, self.bounds)
         if region is not None:
-            b = b.intersect(Bounds.of(region).shrink(self.area_margin))
+            b = b.intersect(region_bounds(region).shrink(self.area_margin))
         if b.empty:
             raise Resample(f"no room for a footprint of radius {radius:.3f} in {region!r}")
-        avoid_b = [Bounds.of(a) for a in avoid]
+        avoid_b = [region_bounds(a) for a in avoid]
         cx, cy, cr = np.asarray(self._cx), np.asarray(self._cy), np.asarray(self._cr) + radius + self.gap
         for _ in range(max(1, self.tries // BATCH)):
             xs = self.rng.uniform(b.xmin, b.xmax, BATCH)
@@ -260,7 +226,7 @@ def free_positions(
     circles += [(float(p[0]), float(p[1]), float(r)) for p, r in reserved]
     out: list[tuple[float, float]] = []
     for r in radii:
-        b = centre_bounds(r).intersect(Bounds.of(region).shrink(margin))
+        b = centre_bounds(r).intersect(region_bounds(region).shrink(margin))
         if b.empty:
             raise ValueError(f"region {region!r} has no room for radius {r}")
         xs = np.arange(b.xmin, b.xmax + 1e-9, step)
@@ -282,5 +248,5 @@ def free_positions(
 
 __all__ = [
     "AREA_MARGIN", "Bounds", "COOL_COLORS", "DEFAULT_COLORS", "GAP", "SPAWN_BOUNDS", "Spawner", "WARM_COLORS",
-    "WORKSPACE_BOUNDS", "centre_bounds", "free_positions", "pick_color", "pick_colors",
+    "WORKSPACE_BOUNDS", "centre_bounds", "region_bounds", "free_positions", "pick_color", "pick_colors",
 ]
