@@ -104,9 +104,10 @@ def test_failed_episode_shows_the_verdict_in_3d(failed):
     # the failing block: a red outline labelled with its diagnostic, static, following the block
     outline = ent[f"/world/objects/obj{b1}/verdict"]
     assert all(s for s, _ in outline)
-    label = _column(outline, "Boxes3D:labels")[0][0]
+    label = _column(outline, "Points3D:labels")[0][0]
     assert label.replace("\n", " ") == result.diagnostics[0]
     assert _column(outline, "Boxes3D:colors")[0][0] == int.from_bytes(bytes([*FAIL_COLOR, 255]), "big")
+    assert _column(outline, "Boxes3D:half_sizes")[0][0][0] > scene.by_id(b1).half_extents[0]
     assert f"/world/objects/obj{b2}/verdict" not in ent  # the block in its bowl is not failing
     # its bowl and the other goal block have their names shown
     assert _column(ent[f"/world/objects/obj{w1}/name"], "Points3D:labels")[0] == [f"{scene.by_id(w1).color} bowl {w1}"]

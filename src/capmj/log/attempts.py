@@ -69,7 +69,8 @@ def attempt_markdown(k: int, parts: Mapping[str, str]) -> str:
     calls = _calls(parts)
     plans = [n for lmp, n in calls if lmp == "planner"]
     verdict = parts.get("verdict", "")
-    lines = [f"# Attempt {k}" + (f" — {verdict.splitlines()[0]}" if verdict else "")]
+    head = verdict.splitlines()[0].split(" (error:")[0] if verdict else ""  # the error has its own section
+    lines = [f"# Attempt {k}" + (f" — {head}" if head else "")]
     for n in plans or [None]:
         base = f"planner/{n}/"
         code = parts.get(base + "code")

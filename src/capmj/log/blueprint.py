@@ -40,7 +40,8 @@ def eye_point() -> tuple[tuple[float, float, float], tuple[float, float, float]]
     return (tx + k * (cx - tx), ty + k * (cy - ty), tz + k * (cz - tz) + lift), (tx - 0.05, ty, tz + lift)
 
 
-def episode_blueprint(attempts: int = 0):  # -> rrb.Blueprint
+def episode_blueprint(attempts: int = 0, active_document: str | None = None):  # -> rrb.Blueprint
+    """The layout; ``active_document`` names the text tab shown first (default: the summary)."""
     import rerun.blueprint as rrb
 
     eye, target = eye_point()
@@ -54,7 +55,8 @@ def episode_blueprint(attempts: int = 0):  # -> rrb.Blueprint
     logs = [rrb.TextLogView(origin=PRIMITIVE_LOG, name="primitives"), rrb.TextLogView(origin=SAY_LOG, name="say")]
     logs += [rrb.Spatial2DView(origin=f"{CAMERA}/{IMAGE_CAMERA}/{kind}", name=f"{IMAGE_CAMERA} {kind}")
              for kind in ("rgb", "depth")]
-    layout = rrb.Horizontal(world, rrb.Vertical(rrb.Tabs(*docs), rrb.Tabs(*logs), row_shares=[3, 1]),
+    layout = rrb.Horizontal(world, rrb.Vertical(rrb.Tabs(*docs, active_tab=active_document), rrb.Tabs(*logs),
+                                                row_shares=[3, 1]),
                             column_shares=[3, 2])
     return rrb.Blueprint(layout, rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
                          rrb.TimePanel(timeline="primitive", state="collapsed"))

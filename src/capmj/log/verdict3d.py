@@ -26,6 +26,8 @@ NEUTRAL_COLOR = [170, 170, 170]
 TARGET_COLOR = [255, 160, 0]
 LABEL_WIDTH = 48
 """Diagnostic labels in 3D are wrapped at this many characters."""
+LABEL_LIFT = 0.06
+"""Height (m) above a failing object's outline where its diagnostic is written."""
 _NAME = re.compile(r"\b(block|zone|bowl|ball|fixture) (\d+)\b")
 _SUBJECT_PREFIX = re.compile(r"^(?:the |a |an )?(?:[a-z]+ ){0,3}$")
 """What may precede a diagnostic's subject: an article and up to three words (size, colour)."""
@@ -118,9 +120,10 @@ def log_verdict(rr: Any, rec: Any, view: VerdictView, objects: Mapping[int, Any]
     for i, diags in view.failing.items():
         o = objects[i]
         half = [h * 1.25 + 0.006 for h in o.half_extents]
-        rec.log(object_entity(o.body) + "/verdict",
-                rr.Boxes3D(half_sizes=[half], colors=[FAIL_COLOR], fill_mode="majorwireframe", radii=[0.003],
-                           labels=["\n".join(textwrap.fill(d, LABEL_WIDTH) for d in diags)], show_labels=True),
+        text = "\n".join(textwrap.fill(d, LABEL_WIDTH) for d in diags)
+        rec.log(object_entity(o.body) + "/verdict",  # outline, and the diagnostic floating above it
+                rr.Boxes3D(half_sizes=[half], colors=[FAIL_COLOR], radii=[0.003]),
+                rr.Points3D([[0, 0, half[2] + LABEL_LIFT]], radii=[0.004], colors=[FAIL_COLOR], labels=[text]),
                 static=True)
         if i in final:
             target = goal_target(i, final[i], goals)
@@ -134,8 +137,7 @@ def log_verdict(rr: Any, rec: Any, view: VerdictView, objects: Mapping[int, Any]
         rec.log(f"{VERDICT}/arrows", rr.Arrows3D(origins=origins, vectors=vectors, colors=[TARGET_COLOR],
                                                  radii=[0.004]))
         rec.log(f"{VERDICT}/targets", rr.Boxes3D(centers=tboxes, half_sizes=tsizes, colors=[TARGET_COLOR],
-                                                 fill_mode="majorwireframe", radii=[0.002], labels=tlabels,
-                                                 show_labels=True))
+                                                 labels=tlabels, show_labels=False))  # names on hover
     return len(origins)
 
 
