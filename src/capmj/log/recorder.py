@@ -17,7 +17,6 @@ the per-attempt documents, the summary) is written by :meth:`RerunRecorder.finis
 from __future__ import annotations
 
 import json
-import math
 import os
 import sys
 import time as _time
@@ -28,6 +27,8 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 
 from capmj.log import geometry as G
+from capmj.log.clock import EpisodeClock
+from capmj.log.images import SceneCameras, depth_mm, image_entity
 from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
                              SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
 from capmj.log.summary import fmt_vec, jsonable, summary_markdown
@@ -45,9 +46,7 @@ KEEP_EVERY = 2
 """Every KEEP_EVERY-th frame is written (10 Hz of simulated time), plus the last frame of each
 primitive and of the episode and the first after a reset: the robot's link transforms are most
 of a log's bytes."""
-_RESET_GAP_S = 0.05          # sim_time gap inserted where the world was reset (one frame period)
 _POSE_EPS = 1e-5             # poses changing less than this (m / quaternion units) are not re-sent
-_DEPTH_MAX_MM = 65535
 
 
 def _is_object(body: str) -> bool:
@@ -93,9 +92,7 @@ class RerunRecorder:
         self._bodies: set[str] = set()
         self._sent: dict[str, np.ndarray] = {}  # last pose sent per body (pos + quat)
         self._objects: dict[int, "ObjectSpec"] = {o.obj_id: o for o in objects or ()}
-        self._offset = 0.0          # added to raw sim times after a world reset, to stay monotonic
-        self._last_raw = -math.inf
-        self._now = 0.0             # latest mapped sim time
+        self._clock = EpisodeClock()
         self._prim = 0              # primitives finished so far
         self._next_start: float | None = None  # time of the first frame after the latest primitive
         self._held: str | None = None
@@ -104,7 +101,7 @@ class RerunRecorder:
         self._frame_no = 0
         self._attached = False
         self._world: "World | None" = None
-        self._rig: Any = None
+        self._cameras: SceneCameras | None = None
         self._image_error: str | None = None
         self._texts: list[tuple[str, str]] = []  # (key, body) of documents, in arrival order
         self.primitive_log: list[dict[str, Any]] = []
@@ -118,22 +115,6 @@ class RerunRecorder:
             G.log_object_specs(rr, self.rec, objects)
 
     # ------------------------------------------------------------------ time
-    def _map(self, t: float | None, *, frame: bool = False) -> float:
-        """Episode time of a simulated time.  Only frames (which come from stepping the world) can
-        reveal a reset; other events are placed at their time or, if that lies in the past of the
-        log (a stale time, or a text logged right after a reset), at the latest logged time."""
-        if t is None:
-            return self._now
-        t = float(t)
-        if not frame:
-            self._now = max(t + self._offset, self._now)
-            return self._now
-        if t < self._last_raw - 1e-9:  # the world was reset to its initial state (re-plan):
-            self._offset += self._last_raw - t + _RESET_GAP_S  # continue the timeline after a small gap
-        self._last_raw = t
-        self._now = max(self._now, t + self._offset)
-        return t + self._offset
-
     def _stamp(self, t: float, prim: int | None = None) -> None:
         self.rec.set_time("sim_time", duration=t)
         self.rec.set_time("primitive", sequence=self._prim if prim is None else prim)
@@ -159,15 +140,14 @@ class RerunRecorder:
         links = [m.body(i).name for i in range(1, m.nbody) if m.body(i).name and m.body(i).name not in objs]
         self._links = G.robot_entities(m, links)
         G.log_robot(rr, self.rec, m, self._links)
-        self._stamp(self._now)
+        self._stamp(self._clock.now)
         G.cup_color(rr, self.rec, m, self._links, None)
         if self.images:
+            self._cameras = SceneCameras(world, self.cameras)
             self._log_images("initial")
 
     def frame(self, time: float, poses: Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]) -> None:
-        offset = self._offset
-        t = self._map(time, frame=True)
-        reset = self._offset != offset  # the first frame after a reset is always kept
+        t, reset = self._clock.frame(time)  # the first frame after a reset is always kept
         label = self._prim + 1 if self._attached else self._prim
         if self._next_start is None:
             self._next_start = t
@@ -229,7 +209,7 @@ class RerunRecorder:
         """Log the primitive's pick/place markers on their own entity at the time it started (so
         they stay visible from then on) and a line in the primitive log at its end."""
         rr = self._rr
-        t = self._map(time)
+        t = self._clock.event(time)
         start = self._next_start if self._next_start is not None and self._next_start <= t else t
         self._next_start = None
         if self._frames:  # the state at the end of a primitive is always kept
@@ -255,7 +235,7 @@ class RerunRecorder:
 
     def text(self, path: str, body: str, time: float | None = None) -> None:
         rr = self._rr
-        t = self._map(time)
+        t = self._clock.event(time)
         self._stamp(t)
         ent = text_entity(path)
         key = ent[len("/text/"):]
@@ -269,43 +249,19 @@ class RerunRecorder:
             self._texts.append((key, str(body)))
 
     def image(self, path: str, rgb: np.ndarray, time: float | None = None) -> None:
-        rr = self._rr
-        self._stamp(self._map(time))
+        self._stamp(self._clock.event(time))
         arr = np.ascontiguousarray(np.asarray(rgb)[..., :3], dtype=np.uint8)
-        self.rec.log(self._image_entity(path, "rgb"), rr.Image(arr).compress(jpeg_quality=90))
+        self.rec.log(image_entity(path, "rgb"), self._rr.Image(arr).compress(jpeg_quality=90))
         self.images_logged += 1
 
     def depth(self, path: str, depth: np.ndarray, time: float | None = None) -> None:
-        rr = self._rr
-        self._stamp(self._map(time))
-        d = np.asarray(depth, dtype=np.float64)
-        mm = np.clip(np.nan_to_num(d * 1000.0, nan=0.0, posinf=_DEPTH_MAX_MM, neginf=0.0), 0, _DEPTH_MAX_MM)
-        self.rec.log(self._image_entity(path, "depth"), rr.DepthImage(mm.astype(np.uint16), meter=1000.0))
+        self._stamp(self._clock.event(time))
+        self.rec.log(image_entity(path, "depth"), self._rr.DepthImage(depth_mm(depth), meter=1000.0))
         self.images_logged += 1
 
-    @staticmethod
-    def _image_entity(path: str, kind: str) -> str:
-        p = "/".join(part for part in str(path).strip().split("/") if part)
-        if p.startswith("camera/"):
-            p = p[len("camera/"):]
-        if not p.endswith("/" + kind) and p != kind:
-            p = f"{p}/{kind}"
-        return "/camera/" + p
-
     def _log_images(self, when: str) -> None:
-        if self._world is None or self._image_error is not None:
-            return
-        try:
-            if self._rig is None:
-                from capmj.sim.cameras import CameraRig
-
-                self._rig = CameraRig(self._world)
-            for name in self.cameras:
-                fr = self._rig.render(name)
-                self.image(f"{name}/rgb", fr.rgb)
-                self.depth(f"{name}/depth", fr.depth)
-        except Exception as exc:  # noqa: BLE001 - images are optional; never fail the episode for them
-            self._image_error = f"{type(exc).__name__}: {exc}"
+        if self._cameras is not None and not self._cameras.log(self.image, self.depth) and not self._image_error:
+            self._image_error = self._cameras.error
             self.text("images", f"camera images disabled at {when}: {self._image_error}")
 
     # ------------------------------------------------------------------ end of episode
@@ -319,7 +275,7 @@ class RerunRecorder:
         rr = self._rr
         kinds = {i: o.kind for i, o in self._objects.items()}
         view = verdict_view(success, diagnostics, kinds, self.goals)
-        self._stamp(self._now)
+        self._stamp(self._clock.now)
         arrows = log_verdict(rr, self.rec, view, self._objects, self._final_positions(), self.goals)
         for p in self.primitive_log:
             if p.get("final_pos") is None:
@@ -365,7 +321,7 @@ class RerunRecorder:
         s["images_logged"] = self.images_logged
         if self._image_error:
             s["image_error"] = self._image_error
-        s["bodies"] = sorted(self._bodies)
+        s["bodies"] = sorted(self._bodies | self._static_bodies)
         from capmj import __version__
 
         s["versions"] = {"capmj": __version__, "rerun": getattr(rr, "__version__", "?")}
@@ -396,12 +352,9 @@ class RerunRecorder:
         # Drop the stream now: its writer/batcher threads live as long as the Python object, and the
         # recorder itself may linger in reference cycles (world <-> listeners) until the next GC.
         del rec
-        if self._rig is not None and hasattr(self._rig, "close"):
-            try:
-                self._rig.close()
-            except Exception:  # noqa: BLE001
-                pass
-        self._rig = None
+        if self._cameras is not None:
+            self._cameras.close()
+        self._cameras = None
         self._world = None
 
     def __enter__(self) -> "RerunRecorder":
