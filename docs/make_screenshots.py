@@ -24,8 +24,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 TASK, SEED = "put-block-into-matching-bowl", 10001
 PLAN = '''say("putting each block into its bowl")
@@ -136,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         store = client.get_state().active_recording
         if log.attempts:
             _show_tab(client, "attempt 1")
-        mid = [p["start"] + 0.6 * (p["time"] - p["start"]) for p in s.get("primitive_log", [])]
+        mid = [r["start"] + 0.6 * (r["time"] - r["start"]) for r in s.get("primitive_log", [])]
         if mid:
             client.set_time("sim_time", duration=float(mid[-1]), play_state="paused", recording=store)
         time.sleep(args.settle / 2)
@@ -151,5 +149,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    np.set_printoptions(precision=3)
     sys.exit(main())

@@ -5,10 +5,11 @@ kept monotonic across re-plan resets) and ``primitive`` (frames carry the index 
 being executed, so selecting primitive k shows the world when primitive k ended, and the last
 index shows the final judged state).
 
-Frames arrive every 25 physics steps; they are buffered and sent as columns (one ``send_columns``
-per body) every 400 frames and at the end, and a body's pose is only re-sent when it changed
-(fixed objects and resting blocks cost one row), which keeps logging cheap in time and bytes.
-Meshes and shapes are static and logged once; only transforms change over time.
+Frames arrive every 25 physics steps (20 Hz); every other one is kept (see ``KEEP_EVERY``), they
+are buffered and sent as columns (one ``send_columns`` per body) at the end, and a body's pose is
+only re-sent when it changed (resting blocks cost one row; fixed objects have a static
+transform), which keeps logging cheap in time and bytes.  Meshes and shapes are static and logged
+once; only transforms change over time.
 
 What the episode's end decides (the verdict in 3D, the colour of each primitive's "final" marker,
 the per-attempt documents, the summary) is written by :meth:`RerunRecorder.finish`.
