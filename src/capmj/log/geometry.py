@@ -53,21 +53,21 @@ def log_object_specs(rr: Any, rec: Any, objects: Sequence["ObjectSpec"]) -> None
         ent = object_entity(o.body)
         col = u8(rgba(o.color))
         hx, hy, hz = o.half_extents
-        lab = {"labels": [object_label(o)], "show_labels": False}
         if o.kind == "bowl":
-            shape = rr.Cylinders3D(lengths=[2 * hz], radii=[hx], colors=[col], **lab)
+            shape = rr.Cylinders3D(lengths=[2 * hz], radii=[hx], colors=[col])
         elif o.kind == "ball":
-            shape = rr.Ellipsoids3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid", **lab)
+            shape = rr.Ellipsoids3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid")
         else:
-            shape = rr.Boxes3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid", **lab)
+            shape = rr.Boxes3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid")
         rec.log(ent, shape, static=True)
         rec.log(ent, rr.Transform3D(translation=list(o.pos),
                                     quaternion=rr.Quaternion(xyzw=[0, 0, math.sin(o.yaw / 2), math.cos(o.yaw / 2)])))
 
 
-def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None, label: str | None,
+def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None,
                geom_ids: Sequence[int] | None = None) -> list[Any]:
-    """rerun archetypes for the box/cylinder/sphere geoms of one body, in its frame."""
+    """rerun archetypes for the box/cylinder/sphere geoms of one body, in its frame (names are
+    not drawn here: :mod:`capmj.log.verdict3d` shows the names that matter)."""
     import mujoco
 
     geoms = np.flatnonzero(model.geom_bodyid == body_id) if geom_ids is None else geom_ids
@@ -88,7 +88,6 @@ def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None, label
         elif gtype == mujoco.mjtGeom.mjGEOM_SPHERE:
             for k, v in zip(spheres, (pos, [float(size[0])] * 3, col)):
                 spheres[k].append(v)
-    lab = {"labels": [label], "show_labels": False} if label else {}
     parts = []
     for cls, fields in ((rr.Boxes3D, boxes), (rr.Cylinders3D, cyls), (rr.Ellipsoids3D, spheres)):
         if not fields["centers"]:
@@ -102,8 +101,7 @@ def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None, label
             fields["quaternions"] = [rr.Quaternion(xyzw=q) for q in fields["quaternions"]]
         if all(c == fields["colors"][0] for c in fields["colors"]):
             fields["colors"] = fields["colors"][:1]
-        parts.append(cls.from_fields(fill_mode="solid", **fields, **lab))
-        lab = {}
+        parts.append(cls.from_fields(fill_mode="solid", **fields))
     return parts
 
 
@@ -114,7 +112,7 @@ def log_world_objects(rr: Any, rec: Any, world: Any) -> None:
     m = world.model
     missing = []
     for o in world.objects:
-        parts = body_geoms(rr, m, m.body(o.body).id, u8(rgba(o.color)), None)  # names: see verdict3d
+        parts = body_geoms(rr, m, m.body(o.body).id, u8(rgba(o.color)))
         if parts:
             rec.log(object_entity(o.body), *parts, static=True)
         else:
@@ -165,7 +163,7 @@ def log_robot(rr: Any, rec: Any, model: Any, entities: Mapping[str, str]) -> Non
     bid = model.body(SUCTION_BODY).id
     cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
     others = [g for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
-    parts = body_geoms(rr, model, bid, None, None, others)
+    parts = body_geoms(rr, model, bid, None, others)
     if parts:
         rec.log(entities[SUCTION_BODY], *parts, static=True)
     if cup >= 0:  # shape static; colour and label over time (static components would hide them)
