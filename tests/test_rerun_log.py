@@ -188,6 +188,7 @@ def test_attempt_documents_layout_say_and_static_texts(tmp_path, failed):
     rec.text("llm/attempt1/api_calls", "get_obj_pos('red block') -> [0.5, 0.1, 0.02]", time=0.5)
     rec.text("llm/attempt1/verdict", "not achieved (error: ...)", time=0.6)
     rec.text("llm/attempt1/report", "REPORTER-REASONING", time=0.6)
+    rec.text("llm/attempt1/parse_completion/1/result", "judge = False\nreason = 'JUDGE-REASON'", time=0.6)
     rec.text("planner/say", "trying again", time=1.0)
     rec.text("llm/attempt2/planner/1/code", "pass\n", time=1.1)
     rec.text("reference/print", "OTHER-TEXT", time=1.2)
@@ -203,7 +204,7 @@ def test_attempt_documents_layout_say_and_static_texts(tmp_path, failed):
     assert marked == [">> 3 | put_first_on_second(a, b)"]
     assert "   2 | b = 2" in lines
     order = [doc.index(x) for x in ("## Plan", "**Error** — line 3: `put_first_on_second(a, b)`", "## Verdict",
-                                    "REPORTER-REASONING", "## API calls", "## Prompts and completions",
+                                    "REPORTER-REASONING", "JUDGE-REASON", "## API calls", "## Prompts and completions",
                                     "PROMPT-1", "COMPLETION-1", "HELPER-PROMPT")]
     assert order == sorted(order)
     assert "# Attempt 2" in log.attempts["2"] and "OTHER-TEXT" in log.attempts["other"]

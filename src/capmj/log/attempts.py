@@ -20,7 +20,9 @@ from typing import Mapping, Sequence
 
 _ATTEMPT = re.compile(r"^llm/attempt(\d+)/(.+)$")
 _LINE = re.compile(r"\bline (\d+)\b")
-_PART_ORDER = ("prompt", "completion", "code", "removed_imports", "printed", "result", "error")
+_PART_ORDER = ("prompt", "completion", "code", "removed_imports", "printed", "identical_to", "result", "error")
+REPORTER_LMPS = ("parse_completion", "vlm_reporter", "reporter_direct")
+"""LMPs whose results are the reporter's verdict and reasoning (shown under "Verdict")."""
 
 
 def error_line(error: str | None) -> int | None:
@@ -92,8 +94,8 @@ def attempt_markdown(k: int, parts: Mapping[str, str]) -> str:
     if parts.get("report"):
         lines += ["", "### Reporter", ""] + _fence(parts["report"])
     for lmp, n in calls:
-        if lmp.endswith("reporter") and parts.get(f"{lmp}/{n}/result"):
-            lines += ["", f"### {lmp} #{n}", ""] + _fence(parts[f"{lmp}/{n}/result"])
+        if lmp in REPORTER_LMPS and (parts.get(f"{lmp}/{n}/result") or parts.get(f"{lmp}/{n}/error")):
+            lines += ["", f"### {lmp} #{n}", ""] + _fence(parts.get(f"{lmp}/{n}/result") or parts[f"{lmp}/{n}/error"])
     lines += ["", "## API calls", ""] + (_fence(parts["api_calls"]) if parts.get("api_calls") else ["_none_"])
     for n in plans:
         if parts.get(f"planner/{n}/printed"):
@@ -116,4 +118,4 @@ def other_markdown(texts: Sequence[tuple[str, str]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["attempt_markdown", "error_line", "numbered", "other_markdown", "split_attempts"]
+__all__ = ["REPORTER_LMPS", "attempt_markdown", "error_line", "numbered", "other_markdown", "split_attempts"]
