@@ -1,0 +1,189 @@
+"""Static 3D geometry of an episode log: the table, the objects' shapes, the robot's meshes.
+
+Everything here is logged once, ``static=True``, in the body frame of its entity; only transforms
+change over time (see :mod:`capmj.log.recorder`).  Shapes come from the compiled MuJoCo model when
+the world is attached (exact), else from the object specs (approximate).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
+
+import numpy as np
+
+from capmj.log.paths import ROBOT, WORLD, object_entity
+
+if TYPE_CHECKING:
+    from capmj.sim.objects import ObjectSpec
+
+GRIP_COLOR = [255, 140, 0]
+"""The suction cup's colour while it holds an object (it is the model's dark grey otherwise)."""
+
+
+def u8(rgba: Sequence[float]) -> list[int]:
+    return [int(round(255 * max(0.0, min(1.0, float(c))))) for c in rgba]
+
+
+def xyzw(q_wxyz: Sequence[float]) -> list[float]:
+    w, x, y, z = (float(v) for v in q_wxyz)
+    return [x, y, z, w]
+
+
+def object_label(o: "ObjectSpec") -> str:
+    """The object's diagnostic name (``small red block 3``), as tasks write it."""
+    from capmj.tasks.predicates import short_label
+
+    return short_label(o)
+
+
+def log_table(rr: Any, rec: Any) -> None:
+    rec.log(f"{WORLD}/table", rr.Boxes3D(centers=[[0.5, 0.0, -0.0004]], half_sizes=[[0.25, 0.5, 0.0003]],
+                                         colors=[[140, 128, 115]], fill_mode="solid"), static=True)
+    rec.log(f"{WORLD}/floor", rr.Boxes3D(centers=[[0.4, 0.0, -0.002]], half_sizes=[[0.8, 0.9, 0.001]],
+                                         colors=[[64, 64, 69]], fill_mode="solid"), static=True)
+    rec.log(WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+
+
+def log_object_specs(rr: Any, rec: Any, objects: Sequence["ObjectSpec"]) -> None:
+    """Approximate shapes and initial poses from the specs alone (no world attached)."""
+    from capmj.sim.palette import rgba
+
+    for o in objects:
+        ent = object_entity(o.body)
+        col = u8(rgba(o.color))
+        hx, hy, hz = o.half_extents
+        if o.kind == "bowl":
+            shape = rr.Cylinders3D(lengths=[2 * hz], radii=[hx], colors=[col])
+        elif o.kind == "ball":
+            shape = rr.Ellipsoids3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid")
+        else:
+            shape = rr.Boxes3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid")
+        rec.log(ent, shape, static=True)
+        rec.log(ent, rr.Transform3D(translation=list(o.pos),
+                                    quaternion=rr.Quaternion(xyzw=[0, 0, math.sin(o.yaw / 2), math.cos(o.yaw / 2)])))
+
+
+def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None,
+               geom_ids: Sequence[int] | None = None) -> list[Any]:
+    """rerun archetypes for the box/cylinder/sphere geoms of one body, in its frame (names are
+    not drawn here: :mod:`capmj.log.verdict3d` shows the names that matter)."""
+    import mujoco
+
+    geoms = np.flatnonzero(model.geom_bodyid == body_id) if geom_ids is None else geom_ids
+    boxes: dict[str, list] = {"centers": [], "quaternions": [], "half_sizes": [], "colors": []}
+    cyls: dict[str, list] = {"centers": [], "quaternions": [], "lengths": [], "radii": [], "colors": []}
+    spheres: dict[str, list] = {"centers": [], "half_sizes": [], "colors": []}
+    for g in geoms:
+        gtype = int(model.geom_type[g])
+        size = model.geom_size[g]
+        pos, quat = model.geom_pos[g].tolist(), xyzw(model.geom_quat[g])
+        col = color or u8(model.geom_rgba[g])
+        if gtype == mujoco.mjtGeom.mjGEOM_BOX:
+            for k, v in zip(boxes, (pos, quat, size.tolist(), col)):
+                boxes[k].append(v)
+        elif gtype == mujoco.mjtGeom.mjGEOM_CYLINDER:
+            for k, v in zip(cyls, (pos, quat, 2 * float(size[1]), float(size[0]), col)):
+                cyls[k].append(v)
+        elif gtype == mujoco.mjtGeom.mjGEOM_SPHERE:
+            for k, v in zip(spheres, (pos, [float(size[0])] * 3, col)):
+                spheres[k].append(v)
+    parts = []
+    for cls, fields in ((rr.Boxes3D, boxes), (rr.Cylinders3D, cyls), (rr.Ellipsoids3D, spheres)):
+        if not fields["centers"]:
+            continue
+        # Leave out what equals the default (one geom at the body origin, one colour): every
+        # component costs its schema in the file.
+        if len(fields["centers"]) == 1 and not np.any(fields["centers"]) and \
+                np.allclose(fields.get("quaternions", [[0, 0, 0, 1]]), [[0, 0, 0, 1]]):
+            fields.pop("centers"), fields.pop("quaternions", None)
+        if "quaternions" in fields:
+            fields["quaternions"] = [rr.Quaternion(xyzw=q) for q in fields["quaternions"]]
+        if all(c == fields["colors"][0] for c in fields["colors"]):
+            fields["colors"] = fields["colors"][:1]
+        parts.append(cls.from_fields(fill_mode="solid", **fields))
+    return parts
+
+
+def log_world_objects(rr: Any, rec: Any, world: Any) -> None:
+    """Exact object shapes from the compiled model (specs as fallback for shapeless bodies)."""
+    from capmj.sim.palette import rgba
+
+    m = world.model
+    missing = []
+    for o in world.objects:
+        parts = body_geoms(rr, m, m.body(o.body).id, u8(rgba(o.color)))
+        if parts:
+            rec.log(object_entity(o.body), *parts, static=True)
+        else:
+            missing.append(o)
+    if missing:
+        log_object_specs(rr, rec, missing)
+
+
+def robot_entities(model: Any, links: Sequence[str]) -> dict[str, str]:
+    """Entity path of each robot link.  A link without joints whose parent is another link (the
+    suction tool on the wrist) is nested under its parent, so it needs no transform over time."""
+    out: dict[str, str] = {}
+    for name in links:
+        b = model.body(name)
+        parent = model.body(int(b.parentid[0])).name
+        if int(model.body_jntnum[b.id]) == 0 and parent in out:
+            out[name] = f"{out[parent]}/{name}"
+        else:
+            out[name] = f"{ROBOT}/{name}"
+    return out
+
+
+def cup_entity(entities: Mapping[str, str]) -> str:
+    from capmj.sim.robot import SUCTION_BODY
+
+    return f"{entities.get(SUCTION_BODY, f'{ROBOT}/{SUCTION_BODY}')}/cup"
+
+
+def log_robot(rr: Any, rec: Any, model: Any, entities: Mapping[str, str]) -> None:
+    """The arm's link meshes (static, in link frames), the static transforms of nested links, and
+    the suction tool's cylinders.  The cup cylinder goes to its own entity so that its colour can
+    change while it grips."""
+    import mujoco
+
+    from capmj.log.robot_mesh import cached_link_meshes
+    from capmj.sim.robot import SUCTION_BODY, SUCTION_CUP_GEOM
+
+    for name, ent in entities.items():
+        if ent != f"{ROBOT}/{name}":
+            b = model.body(name)
+            rec.log(ent, rr.Transform3D(translation=b.pos.tolist(), quaternion=rr.Quaternion(xyzw=xyzw(b.quat))),
+                    static=True)
+    for lm in cached_link_meshes(model, tuple(n for n in entities if n != SUCTION_BODY)):
+        rec.log(entities[lm.body], rr.Mesh3D(vertex_positions=lm.vertices, triangle_indices=lm.faces,
+                                             vertex_normals=lm.normals, vertex_colors=lm.colors), static=True)
+    if SUCTION_BODY not in entities:
+        return
+    bid = model.body(SUCTION_BODY).id
+    cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
+    others = [g for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
+    parts = body_geoms(rr, model, bid, None, others)
+    if parts:
+        rec.log(entities[SUCTION_BODY], *parts, static=True)
+    if cup >= 0:  # shape static; colour and label over time (static components would hide them)
+        size = model.geom_size[cup]
+        rec.log(cup_entity(entities), rr.Cylinders3D.from_fields(
+            centers=[model.geom_pos[cup].tolist()], quaternions=[rr.Quaternion(xyzw=xyzw(model.geom_quat[cup]))],
+            lengths=[2 * float(size[1])], radii=[float(size[0])], fill_mode="solid"), static=True)
+
+
+def cup_color(rr: Any, rec: Any, model: Any, entities: Mapping[str, str], held: str | None) -> None:
+    """Colour the cup (and label what it holds) from the current time on."""
+    import mujoco
+
+    from capmj.sim.robot import SUCTION_CUP_GEOM
+
+    cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
+    col = GRIP_COLOR if held else u8(model.geom_rgba[cup])
+    rec.log(cup_entity(entities), rr.Cylinders3D.from_fields(
+        colors=[col], labels=[f"gripping {held}" if held else "suction cup"], show_labels=bool(held)))
+
+
+__all__ = ["GRIP_COLOR", "body_geoms", "cup_color", "cup_entity", "robot_entities", "log_object_specs", "log_robot", "log_table",
+           "log_world_objects", "object_label", "u8", "xyzw"]

@@ -1,0 +1,368 @@
+"""One ``.rrd`` file per episode, written without a viewer: :class:`RerunRecorder`.
+
+The entity paths are listed in :mod:`capmj.log.paths`.  Timelines: ``sim_time`` (simulated seconds,
+kept monotonic across re-plan resets) and ``primitive`` (frames carry the index of the primitive
+being executed, so selecting primitive k shows the world when primitive k ended, and the last
+index shows the final judged state).
+
+Frames arrive every 25 physics steps (20 Hz); every other one is kept (see ``KEEP_EVERY``), they
+are buffered and sent as columns (one ``send_columns`` per body) at the end, and a body's pose is
+only re-sent when it changed (resting blocks cost one row; fixed objects have a static
+transform), which keeps logging cheap in time and bytes.  Meshes and shapes are static and logged
+once; only transforms change over time.
+
+What the episode's end decides (the verdict in 3D, the colour of each primitive's "final" marker,
+the per-attempt documents, the summary) is written by :meth:`RerunRecorder.finish`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time as _time
+from datetime import timedelta
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
+
+import numpy as np
+
+from capmj.log import geometry as G
+from capmj.log.clock import EpisodeClock
+from capmj.log.images import SceneCameras, depth_mm, image_entity
+from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
+                             SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
+from capmj.log.summary import fmt_vec, jsonable, summary_markdown
+
+if TYPE_CHECKING:
+    from capmj.sim.objects import ObjectSpec
+    from capmj.sim.world import World
+
+APPLICATION_ID = "capmj"
+CAMERAS: tuple[str, ...] = ("front", "left", "right")
+MARKDOWN_TEXTS = frozenset({"goal", "verdict"})
+PICK_COLOR, PLACE_COLOR, PATH_COLOR, FAILED_PATH_COLOR = [255, 210, 0], [40, 150, 255], [200, 200, 200], [230, 60, 60]
+_FLUSH_FRAMES = 4000         # frames buffered before a flush (200 s of simulated time)
+KEEP_EVERY = 2
+"""Every KEEP_EVERY-th frame is written (10 Hz of simulated time), plus the last frame of each
+primitive and of the episode and the first after a reset: the robot's link transforms are most
+of a log's bytes."""
+_POSE_EPS = 1e-5             # poses changing less than this (m / quaternion units) are not re-sent
+
+
+def _is_object(body: str) -> bool:
+    return body.startswith("obj") and body[3:].isdigit()
+
+
+class RerunRecorder:
+    """A :class:`capmj.record.Recorder` writing one ``.rrd`` file, no viewer needed.
+
+    ``objects`` (the scene's :class:`ObjectSpec` tuple) gives the static shapes when the world is
+    not attached; :meth:`attach` (done by the runner) gives exact shapes, the robot's meshes, grip
+    state and camera images.  ``goals`` (the task's oracle goals) tell where failing objects should
+    be.  Call :meth:`finish` with the episode result to write the verdict and summary, then
+    :meth:`close`.
+    """
+
+    def __init__(self, path: str | Path, *, task: str | None = None, seed: int | None = None,
+                 agent: str | None = None, model: str | None = None, images: bool = False,
+                 cameras: Sequence[str] = CAMERAS, objects: Sequence["ObjectSpec"] | None = None,
+                 goals: Sequence[Any] = (), recording_id: str | None = None) -> None:
+        if "rerun" not in sys.modules:  # hush the SDK's per-file warning about the footer we leave out
+            os.environ.setdefault("RUST_LOG", "warn,re_log_encoding::rrd::file_sink=error")
+        import rerun as rr
+
+        self._rr = rr
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.meta = {"task": task, "seed": seed, "agent": agent, "model": model}
+        self.images = bool(images)
+        self.cameras = tuple(cameras)
+        self.goals = tuple(goals)
+        rid = recording_id or f"{task}/{seed}/{agent}/{model or '-'}"
+        # Batch each entity's rows of the whole episode into one chunk: every chunk carries its
+        # schema (~0.5 kB per component), which would otherwise outweigh the data.
+        batching = rr.ChunkBatcherConfig(flush_tick=timedelta(hours=1), flush_num_bytes=8 << 20,
+                                         flush_num_rows=1 << 20, chunk_max_rows_if_unsorted=1 << 20)
+        self.rec = rr.RecordingStream(APPLICATION_ID, recording_id=rid, batcher_config=batching)
+        self.rec.set_log_time_enabled(False)  # wall-clock time would make files differ run to run
+        # No footer: the manifest is for random access into large recordings and would double a
+        # small episode log (measured 369 kB -> 200 kB); viewers and RrdReader read the stream.
+        self.rec.save(str(self.path), write_footer=False)
+        self._frames: list[tuple[float, int, Mapping[str, Any], bool]] = []  # (t, label, poses, keep)
+        self._bodies: set[str] = set()
+        self._sent: dict[str, np.ndarray] = {}  # last pose sent per body (pos + quat)
+        self._objects: dict[int, "ObjectSpec"] = {o.obj_id: o for o in objects or ()}
+        self._clock = EpisodeClock()
+        self._prim = 0              # primitives finished so far
+        self._next_start: float | None = None  # time of the first frame after the latest primitive
+        self._held: str | None = None
+        self._links: dict[str, str] = {}  # robot body -> entity path (after attach)
+        self._static_bodies: set[str] = set()  # bodies with a static transform (fixed objects)
+        self._frame_no = 0
+        self._attached = False
+        self._world: "World | None" = None
+        self._cameras: SceneCameras | None = None
+        self._image_error: str | None = None
+        self._texts: list[tuple[str, str]] = []  # (key, body) of documents, in arrival order
+        self.primitive_log: list[dict[str, Any]] = []
+        self.text_counts: dict[str, int] = {}
+        self.images_logged = 0
+        self.summary: dict[str, Any] | None = None
+        self._documents_written = False
+        self._closed = False
+        G.log_table(rr, self.rec)
+        if objects:
+            G.log_object_specs(rr, self.rec, objects)
+
+    # ------------------------------------------------------------------ time
+    def _stamp(self, t: float, prim: int | None = None) -> None:
+        self.rec.set_time("sim_time", duration=t)
+        self.rec.set_time("primitive", sequence=self._prim if prim is None else prim)
+
+    # ------------------------------------------------------------------ Recorder protocol
+    def attach(self, world: "World") -> None:
+        """Use the live world: exact object shapes, robot meshes, grip state, camera images."""
+        rr = self._rr
+        self._world = world
+        self._attached = True
+        self._objects.update({o.obj_id: o for o in world.objects})
+        G.log_world_objects(rr, self.rec, world)
+        for o in world.objects:  # fixed objects never move: one static transform, no rows over time
+            if o.fixed:
+                b = world.body_of[o.obj_id]
+                self._static_bodies.add(o.body)
+                self._sent[o.body] = np.concatenate([world.data.xpos[b], world.data.xquat[b]])
+                self.rec.log(f"{OBJECTS}/{o.body}", rr.Transform3D(
+                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=G.xyzw(world.data.xquat[b]))),
+                    static=True)
+        m = world.model
+        objs = {o.body for o in world.objects}
+        links = [m.body(i).name for i in range(1, m.nbody) if m.body(i).name and m.body(i).name not in objs]
+        self._links = G.robot_entities(m, links)
+        G.log_robot(rr, self.rec, m, self._links)
+        self._stamp(self._clock.now)
+        G.cup_color(rr, self.rec, m, self._links, None)
+        if self.images:
+            self._cameras = SceneCameras(world, self.cameras)
+            self._log_images("initial")
+
+    def frame(self, time: float, poses: Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]) -> None:
+        t, reset = self._clock.frame(time)  # the first frame after a reset is always kept
+        label = self._prim + 1 if self._attached else self._prim
+        if self._next_start is None:
+            self._next_start = t
+        self._frame_no += 1
+        self._frames.append((t, label, dict(poses), reset or (self._frame_no - 1) % KEEP_EVERY == 0))
+        if self._world is not None:
+            held_id = self._world.suction.held
+            held = None if held_id is None else G.object_label(self._world.by_id[held_id])
+            if held != self._held:
+                self._held = held
+                self._stamp(t, label)
+                G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
+        if len(self._frames) >= _FLUSH_FRAMES:
+            self._flush_frames()
+
+    def _flush_frames(self, final_label: int | None = None) -> None:
+        if not self._frames:
+            return
+        rr = self._rr
+        frames = [f[:3] for i, f in enumerate(self._frames) if f[3] or i == len(self._frames) - 1]
+        self._frames = []
+        names: list[str] = []
+        for _, _, poses in frames:
+            names += [n for n in poses if n not in names]
+        for n in names:
+            ent = f"{OBJECTS}/{n}" if _is_object(n) else f"{ROBOT}/{n}"
+            if self._links.get(n, ent) != ent or n in self._static_bodies:  # nested in a link, or fixed
+                continue
+            rows = self._changed_rows(n, [(t, lab, poses[n]) for t, lab, poses in frames if n in poses])
+            if not rows:
+                continue
+            self.rec.send_columns(ent, indexes=self._index(rows, final_label),
+                                  columns=rr.Transform3D.columns(
+                                      translation=np.array([r[2][0] for r in rows], dtype=np.float32),
+                                      quaternion=np.array([G.xyzw(r[2][1]) for r in rows], dtype=np.float32)))
+
+    def _changed_rows(self, key: str, rows: list) -> list:
+        """The rows whose pose differs from the last one sent for ``key`` (latest-at fills the gaps)."""
+        out = []
+        last = self._sent.get(key)
+        for t, lab, (pos, quat) in rows:
+            cur = np.concatenate([np.asarray(pos, float).ravel(), np.asarray(quat, float).ravel()])
+            if last is not None and last.shape == cur.shape and np.max(np.abs(cur - last)) < _POSE_EPS:
+                continue
+            last = cur
+            out.append((t, lab, (pos, quat)))
+        if last is not None:
+            self._sent[key] = last
+        self._bodies.add(key)
+        return out
+
+    def _index(self, rows: list, final_label: int | None) -> list:
+        rr = self._rr
+        labels = [r[1] if final_label is None else min(r[1], final_label) for r in rows]
+        return [rr.TimeColumn("sim_time", duration=np.array([r[0] for r in rows], dtype=np.float64)),
+                rr.TimeColumn("primitive", sequence=np.array(labels, dtype=np.int64))]
+
+    def primitive(self, index: int, time: float, info: Mapping[str, Any]) -> None:
+        """Log the primitive's pick/place markers on their own entity at the time it started (so
+        they stay visible from then on) and a line in the primitive log at its end."""
+        rr = self._rr
+        t = self._clock.event(time)
+        start = self._next_start if self._next_start is not None and self._next_start <= t else t
+        self._next_start = None
+        if self._frames:  # the state at the end of a primitive is always kept
+            self._frames[-1] = (*self._frames[-1][:3], True)
+        self._prim = int(index)
+        rec = {"index": int(index), "time": t, "start": start, **jsonable(dict(info))}
+        self.primitive_log.append(rec)
+        pick = [float(v) for v in info.get("pick") or (0, 0, 0)]
+        place = [float(v) for v in info.get("place") or (0, 0, 0)]
+        ok = bool(info.get("ok", info.get("status") == "ok"))
+        self._stamp(start, index)
+        ent = f"{PRIMITIVES}/{index}"
+        self.rec.log(ent, rr.Points3D([pick, place], colors=[PICK_COLOR, PLACE_COLOR]),
+                     rr.Arrows3D(origins=[pick], vectors=[np.subtract(place, pick).tolist()],
+                                 colors=[PATH_COLOR if ok else FAILED_PATH_COLOR], labels=[f"#{index}"]))
+        self._stamp(t, index)
+        line = (f"#{index} attempt {info.get('attempt', 0)}: {info.get('status')} obj {info.get('obj_id')} "
+                f"pick {fmt_vec(pick)} -> place {fmt_vec(place)} final {fmt_vec(info.get('final_pos'))}"
+                + (f" ({info['message']})" if info.get("message") else ""))
+        self.rec.log(PRIMITIVE_LOG, rr.TextLog(line, level="INFO" if ok else "WARN"))
+        if self.images:
+            self._log_images(f"primitive {index}")
+
+    def text(self, path: str, body: str, time: float | None = None) -> None:
+        rr = self._rr
+        t = self._clock.event(time)
+        self._stamp(t)
+        ent = text_entity(path)
+        key = ent[len("/text/"):]
+        self.text_counts[key] = self.text_counts.get(key, 0) + 1
+        if key in LOG_TEXTS:
+            self.rec.log(ent, rr.TextLog(str(body)))
+            return
+        media = rr.MediaType.MARKDOWN if key in MARKDOWN_TEXTS or key.endswith(".md") else rr.MediaType.TEXT
+        self.rec.log(ent, rr.TextDocument(str(body), media_type=media), static=key in STATIC_TEXTS)
+        if key not in STATIC_TEXTS:
+            self._texts.append((key, str(body)))
+
+    def image(self, path: str, rgb: np.ndarray, time: float | None = None) -> None:
+        self._stamp(self._clock.event(time))
+        arr = np.ascontiguousarray(np.asarray(rgb)[..., :3], dtype=np.uint8)
+        self.rec.log(image_entity(path, "rgb"), self._rr.Image(arr).compress(jpeg_quality=90))
+        self.images_logged += 1
+
+    def depth(self, path: str, depth: np.ndarray, time: float | None = None) -> None:
+        self._stamp(self._clock.event(time))
+        self.rec.log(image_entity(path, "depth"), self._rr.DepthImage(depth_mm(depth), meter=1000.0))
+        self.images_logged += 1
+
+    def _log_images(self, when: str) -> None:
+        if self._cameras is not None and not self._cameras.log(self.image, self.depth) and not self._image_error:
+            self._image_error = self._cameras.error
+            self.text("images", f"camera images disabled at {when}: {self._image_error}")
+
+    # ------------------------------------------------------------------ end of episode
+    def _final_positions(self) -> dict[int, np.ndarray]:
+        return {i: self._sent[o.body][:3].copy() for i, o in self._objects.items() if o.body in self._sent}
+
+    def _log_verdict(self, success: bool, diagnostics: Sequence[str]) -> dict[str, Any]:
+        """The verdict in 3D (at the end of the timeline) and each primitive's final marker."""
+        from capmj.log.verdict3d import NEUTRAL_COLOR, FAIL_COLOR, OK_COLOR, log_verdict, verdict_view
+
+        rr = self._rr
+        kinds = {i: o.kind for i, o in self._objects.items()}
+        view = verdict_view(success, diagnostics, kinds, self.goals)
+        self._stamp(self._clock.now)
+        arrows = log_verdict(rr, self.rec, view, self._objects, self._final_positions(), self.goals)
+        for p in self.primitive_log:
+            if p.get("final_pos") is None:
+                continue
+            holds = view.holds(p.get("obj_id"))
+            col = NEUTRAL_COLOR if holds is None else OK_COLOR if holds else FAIL_COLOR
+            o = self._objects.get(p.get("obj_id"))
+            half = list(o.half_extents) if o is not None else [0.01, 0.01, 0.01]
+            self._stamp(p["time"], p["index"])
+            self.rec.log(f"{PRIMITIVES}/{p['index']}/final",
+                         rr.Boxes3D(centers=[p["final_pos"]], half_sizes=[half], colors=[col]))  # wireframe
+        return {"failing_objects": sorted(view.failing), "named_objects": list(view.named), "verdict_arrows": arrows}
+
+    def _write_documents(self) -> int:
+        """The per-attempt Markdown documents (static) and the other texts; returns the attempts."""
+        from capmj.log.attempts import attempt_markdown, other_markdown, split_attempts
+        from capmj.log.blueprint import OTHER_TEXTS
+
+        rr = self._rr
+        self._documents_written = True
+        attempts, other = split_attempts(self._texts)
+        for k, parts in sorted(attempts.items()):
+            self.rec.log(attempt_entity(k), rr.TextDocument(attempt_markdown(k, parts), media_type=rr.MediaType.MARKDOWN),
+                         static=True)
+        if other:
+            self.rec.log(OTHER_TEXTS, rr.TextDocument(other_markdown(other), media_type=rr.MediaType.MARKDOWN),
+                         static=True)
+        return max(attempts, default=0)
+
+    def finish(self, result: Any) -> dict[str, Any]:
+        """Write the verdict in 3D, the per-attempt documents and the episode summary (Markdown and
+        JSON) from an ``EpisodeResult`` or its dict."""
+        rr = self._rr
+        self._flush_frames(final_label=self._prim)
+        res = result.to_dict() if hasattr(result, "to_dict") else dict(result or {})
+        s: dict[str, Any] = {"schema": SUMMARY_SCHEMA}
+        s.update({k: v for k, v in self.meta.items() if v is not None})
+        s.update(jsonable(res))
+        s.update(self._log_verdict(bool(res.get("success")), list(res.get("diagnostics") or ())))
+        s["attempt_documents"] = self._write_documents()
+        s["primitive_log"] = self.primitive_log
+        s["texts"] = dict(self.text_counts)
+        s["images_logged"] = self.images_logged
+        if self._image_error:
+            s["image_error"] = self._image_error
+        s["bodies"] = sorted(self._bodies | self._static_bodies)
+        from capmj import __version__
+
+        s["versions"] = {"capmj": __version__, "rerun": getattr(rr, "__version__", "?")}
+        s["written_at"] = _time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        self.summary = s
+        self.rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(s), media_type=rr.MediaType.MARKDOWN), static=True)
+        self.rec.log(SUMMARY_JSON_PATH, rr.TextDocument(json.dumps(s, sort_keys=True), media_type="application/json"),
+                     static=True)
+        return s
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._flush_frames(final_label=self._prim)
+        attempts = (self.summary or {}).get("attempt_documents", 0)
+        try:
+            if not self._documents_written:  # an episode that ended without finish(): keep its texts readable
+                attempts = self._write_documents()
+            from capmj.log.blueprint import episode_blueprint
+
+            self.rec.send_blueprint(episode_blueprint(attempts), make_active=True, make_default=True)
+        except Exception:  # noqa: BLE001 - a layout is a convenience; the data is already written
+            pass
+        rec, self.rec = self.rec, None
+        rec.flush()
+        rec.disconnect()
+        # Drop the stream now: its writer/batcher threads live as long as the Python object, and the
+        # recorder itself may linger in reference cycles (world <-> listeners) until the next GC.
+        del rec
+        if self._cameras is not None:
+            self._cameras.close()
+        self._cameras = None
+        self._world = None
+
+    def __enter__(self) -> "RerunRecorder":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+__all__ = ["APPLICATION_ID", "CAMERAS", "RerunRecorder"]

@@ -1,0 +1,141 @@
+"""The UR5e's visual meshes for episode logs: one coarse, coloured triangle mesh per link.
+
+The meshes are the Menagerie OBJ files as MuJoCo compiled them (``model.mesh_vert`` /
+``mesh_face``, visual geoms of group 2), moved into their body frame with the geom's pose, so a
+link mesh is drawn correctly by the link's world transform alone.  Each link's mesh is welded and
+simplified in two steps, per visual geom (so colour boundaries stay sharp): vertex clustering on a
+fine grid closes the seams that stop an edge-collapse simplifier, then ``trimesh``'s quadric
+decimation (``fast-simplification``) removes most of what is left.  The originals have ~120 k
+triangles, far too many for a log that should stay small; a few thousand keep the silhouette and
+the blue joint caps.  Vertex normals come from ``trimesh`` (rerun draws a mesh without normals
+unlit).
+
+The result depends only on the model's meshes, so it is computed once per process and reused by
+every episode.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+VISUAL_GROUP = 2
+"""MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
+CLUSTER_M = 0.006
+"""Grid size (m) of the vertex clustering: vertices in one cell (and of one geom) merge."""
+KEEP_FACES = 0.08
+"""Share of the clustered triangles the quadric decimation aims to keep (it keeps more where the
+mesh has open boundaries)."""
+
+
+@dataclass(frozen=True, eq=False)
+class LinkMesh:
+    """One link's visual mesh in the link's body frame (float32 arrays, read-only)."""
+
+    body: str
+    vertices: np.ndarray      # (V, 3)
+    faces: np.ndarray         # (F, 3) uint32
+    normals: np.ndarray       # (V, 3)
+    colors: np.ndarray        # (V, 4) uint8 RGBA
+
+
+def _quat_matrix(q_wxyz: np.ndarray) -> np.ndarray:
+    w, x, y, z = (float(v) for v in q_wxyz)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def cluster(vertices: np.ndarray, faces: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex-clustering simplification: merge the vertices of each ``cell``-sized grid cell into
+    their mean and keep the faces whose three corners land in different cells (once each)."""
+    keys = np.floor(vertices / cell).astype(np.int64)
+    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    n = int(inverse.max()) + 1 if inverse.size else 0
+    sums = np.zeros((n, 3))
+    np.add.at(sums, inverse, vertices)
+    counts = np.bincount(inverse, minlength=n).astype(float)
+    new_v = sums / counts[:, None]
+    f = inverse[faces]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
+    if len(f):
+        _, first = np.unique(np.sort(f, axis=1), axis=0, return_index=True)
+        f = f[np.sort(first)]
+    used = np.unique(f)
+    remap = np.full(n, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return new_v[used], remap[f]
+
+
+def _geom_part(model: Any, g: int) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (body frame) and faces of mesh geom ``g``."""
+    mid = int(model.geom_dataid[g])
+    va, vn = int(model.mesh_vertadr[mid]), int(model.mesh_vertnum[mid])
+    fa, fn = int(model.mesh_faceadr[mid]), int(model.mesh_facenum[mid])
+    v = np.asarray(model.mesh_vert[va:va + vn], dtype=np.float64)
+    f = np.asarray(model.mesh_face[fa:fa + fn], dtype=np.int64)
+    v = v @ _quat_matrix(model.geom_quat[g]).T + np.asarray(model.geom_pos[g])
+    return v, f
+
+
+def _geom_rgba(model: Any, g: int) -> np.ndarray:
+    mat = int(model.geom_matid[g])
+    rgba = model.mat_rgba[mat] if mat >= 0 else model.geom_rgba[g]
+    return np.clip(np.round(np.asarray(rgba) * 255), 0, 255).astype(np.uint8)
+
+
+def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
+    """The simplified visual mesh of each body in ``bodies`` that has visual mesh geoms."""
+    import mujoco
+    import trimesh
+
+    out: list[LinkMesh] = []
+    for name in bodies:
+        bid = model.body(name).id
+        geoms = [g for g in np.flatnonzero(model.geom_bodyid == bid)
+                 if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == VISUAL_GROUP]
+        verts, faces, norms, cols = [], [], [], []
+        offset = 0
+        for g in geoms:
+            v, f = _geom_part(model, g)
+            tm = trimesh.Trimesh(v, f, process=True)  # welds MuJoCo's per-face vertex copies
+            sv, sf = cluster(np.asarray(tm.vertices), np.asarray(tm.faces), cell)
+            if not len(sf):
+                continue
+            part = trimesh.Trimesh(sv, sf, process=False)
+            if len(sf) > 64:
+                part = part.simplify_quadric_decimation(face_count=max(32, int(len(sf) * KEEP_FACES)))
+                sv, sf = np.asarray(part.vertices), np.asarray(part.faces)
+            verts.append(sv)
+            faces.append(sf + offset)
+            norms.append(np.asarray(part.vertex_normals))
+            cols.append(np.tile(_geom_rgba(model, g), (len(sv), 1)))
+            offset += len(sv)
+        if not faces:
+            continue
+        arrays = [np.concatenate(verts).astype(np.float32), np.concatenate(faces).astype(np.uint32),
+                  np.concatenate(norms).astype(np.float32), np.concatenate(cols)]
+        for a in arrays:
+            a.flags.writeable = False
+        out.append(LinkMesh(name, *arrays))
+    return out
+
+
+_CACHE: dict[tuple[int, int, tuple[str, ...], float], list[LinkMesh]] = {}
+
+
+def cached_link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
+    """:func:`link_meshes`, computed once per process for the same mesh data (every episode's model
+    holds the same arm)."""
+    key = (int(model.nmeshvert), int(model.nmeshface), tuple(bodies), float(cell))
+    if key not in _CACHE:
+        _CACHE[key] = link_meshes(model, bodies, cell)
+    return _CACHE[key]
+
+
+__all__ = ["CLUSTER_M", "KEEP_FACES", "LinkMesh", "VISUAL_GROUP", "cached_link_meshes", "cluster", "link_meshes"]
