@@ -36,6 +36,7 @@ from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError, LLMError
 from capmj.llm import LLMClient, LLMConfig
+from capmj.tasks.protocol import episode_rng
 
 __all__ = ["CACHE_ENV", "DEFAULT_LMP_BUDGET", "LLMAgent"]
 
@@ -144,7 +145,8 @@ class LLMAgent:
         api = PlannerAPI(ctx)
         session = LMPSession(complete=client.complete, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
-                             lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
+                             lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
+                             rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
         calls_before = len(client.records)
         record: dict[str, Any] = {"attempt": k, "reset": k > 1, "code": None, "error": None, "verdict": None,
                                   "report": "", "primitives": 0, "llm_calls": 0, "api_calls": 0}
