@@ -42,7 +42,7 @@ def test_endless_plan_ends_its_attempt_with_a_named_budget(server: StubLLMServer
     result = episode(agent(server))  # the default plan budget, no wall-time override
     assert result.error is not None and result.error.startswith("BudgetExceeded: line "), result.error
     assert " of the plan: `" in result.error
-    budget = "executed-line budget of 300000 lines" if "pass" in plan else "allocation budget of"
+    budget = "executed-line budget of 100000 lines" if "pass" in plan else "allocation budget of"
     assert budget in result.error, result.error
     assert "`while True" in result.error or "`x = np.zeros" in result.error  # the line is quoted
 

@@ -19,8 +19,8 @@ from capmj.errors import PlanError
 
 __all__ = ["DEFAULT_PLAN_BUDGET", "Feedback", "PlanOutcome", "build_messages", "plan_and_run"]
 
-DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=60.0, max_api_calls=2000, max_lines=300_000)
-"""Deterministic: 300 000 executed lines (loop iterations included), 2000 API calls, the
+DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=60.0, max_api_calls=2000, max_lines=100_000)
+"""Deterministic: 100 000 executed lines (loop iterations included), 2000 API calls, the
 sandbox's element caps; physics is budgeted in simulation steps and primitives by the episode
 context.  The wall time is a backstop for the plan's own Python only: time inside API functions
 (simulation, helper LMP calls waiting on the LLM) is not counted."""

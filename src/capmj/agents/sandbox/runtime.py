@@ -31,9 +31,9 @@ from typing import Any
 import numpy as _np
 
 from capmj.agents.sandbox.checks import _Rewriter, check_code
-from capmj.agents.sandbox.ordered import OrderedSet
 from capmj.agents.sandbox.facades import (_builtins, _checked_op, _Facade, _facades, _growth,
                                           _TypeCheck, _wraps)
+from capmj.agents.sandbox.ordered import OrderedSet
 from capmj.errors import BudgetExceeded, ConfigError, PlanError
 
 MAX_INT_BITS = 1_000_000
@@ -55,7 +55,7 @@ class SandboxBudget:
     wall_s: float = 30.0
     max_api_calls: int = 500
     max_elements: int = 10_000_000
-    max_lines: int | None = 200_000
+    max_lines: int | None = 100_000
     max_total_elements: int | None = 100_000_000
 
     def __post_init__(self) -> None:
