@@ -224,7 +224,7 @@ def test_fixed_objects_and_bad_targets_error_clearly(api_ctx):
     with pytest.raises(ValueError, match="is fixed and cannot be picked"):
         f["put_first_on_second"](name_of(ctx, 2), name_of(ctx, 1))
     with pytest.raises(ValueError, match="unknown object"):
-        f["put_first_on_second"]("movable small red block", name_of(ctx, 1))
+        f["put_first_on_second"]("movable small orange block", name_of(ctx, 1))
     with pytest.raises(ValueError, match="on itself"):
         f["put_first_on_second"](name_of(ctx, 3), name_of(ctx, 3))
     with pytest.raises(ValueError, match="target must be"):

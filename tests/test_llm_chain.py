@@ -249,11 +249,11 @@ def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:
 MALFORMED = {
     "no_code": ("I am sorry, but I cannot help with stacking blocks today.", "no code in completion"),
     "syntax_error": (code("for block in\n    put_first_on_second(block)"), "SyntaxError"),
-    "infinite_loop": (code("while True:\n    pass"), "wall time budget"),
+    "infinite_loop": (code("while True:\n    pass"), "executed-line budget of 100000 lines exceeded"),
     "import_os": (code("import os\nos.system('echo hi')"), "import statements are not allowed"),
     "dunder_escape": (code("x = ().__class__.__bases__[0].__subclasses__()"), "attribute"),
     "huge_allocation": (code("x = [0] * (10 ** 10)"), "elements"),
-    "raises": (code("put_first_on_second('the red block', 'fixed orange zone with obj_id 1')"), "unknown object"),
+    "raises": (code("put_first_on_second('the green block', 'fixed orange zone with obj_id 1')"), "unknown object"),
 }
 
 
@@ -262,7 +262,7 @@ def test_malformed_completion_ends_the_attempt_with_a_recorded_error(server: Stu
     answer, message = MALFORMED[case]
     server.respond_with(Router(planner=answer))
     rec = MemoryRecorder()
-    a = agent(server, plan_budget=SandboxBudget(wall_s=0.5, max_api_calls=100))
+    a = agent(server, plan_budget=SandboxBudget(wall_s=30, max_api_calls=100))
     result = episode(a, rec)  # the runner returns a result, nothing escapes
     assert not result.success
     assert result.error is not None and result.error.startswith(("PlanError", "BudgetExceeded")), result.error

@@ -14,7 +14,10 @@ Conventions (the spec's, stated at every function):
 * Rotations at this API are quaternions **(x, y, z, w)** (MuJoCo and ``Pose`` use (w, x, y, z)).
 * Object names are the unique ``ObjectSpec.name`` strings ("movable small blue block with
   obj_id 3"), read from the live world on every call.  An int obj_id is accepted wherever a name
-  is; unknown names raise ``ValueError`` listing close and valid names.
+  is.  A near-miss name resolves when exactly one object fits it (see :func:`near_miss`: missing
+  movable/fixed/size words, underscores, an id whose object has the given words, a unique
+  colour + kind); each such resolution is logged.  Otherwise ``ValueError`` lists the closest
+  and the valid names.
 * Footprints: blocks, zones and fixture walls are oriented rectangles (their geoms' xy extent at
   the current yaw), bowls and balls discs; a tilted object (> 20°) uses its world xy box.  The
   geometry (footprints, surfaces, occupancy, free positions) lives in
@@ -28,6 +31,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
@@ -77,6 +81,40 @@ def _is_pose(v: Any) -> bool:
     return (isinstance(v, (list, tuple)) and len(v) == 2 and _is_vector(v[0]) and _is_vector(v[1], (4,)))
 
 
+_FILLER = frozenset({"the", "a", "an", "with", "obj", "id", "object", "of"})
+
+
+def _words(text: str) -> list[str]:
+    return re.findall(r"[a-z]+|\d+", text.lower().replace("_", " "))
+
+
+def near_miss(query: str, objects: Sequence[ObjectSpec]) -> ObjectSpec | None:
+    """The one object a near-miss name can only mean, else None.
+
+    The query's words (case, ``_`` and punctuation ignored; "the", "with", "obj_id" ... dropped)
+    must all be words of the object's name, and a number in the query must be its obj_id:
+    ``'brown bowl'`` (one brown bowl), ``'movable_blue_block_with_obj_id_3'``, ``'yellow block
+    with obj_id 4'``.  Two or more fitting objects, or none, give None: nothing is guessed.
+    """
+    words = _words(query)
+    ids = {int(w) for w in words if w.isdigit()}
+    words = [w for w in words if not w.isdigit() and w not in _FILLER]
+    if len(ids) > 1 or not (words or ids):
+        return None
+    fits = [o for o in objects if (not ids or o.obj_id in ids) and set(words) <= set(_words(o.name))]
+    return fits[0] if len(fits) == 1 else None
+
+
+def _closest(query: str, names: Sequence[str], n: int = 3) -> list[str]:
+    """Names sharing the most words with ``query`` (ties by string similarity)."""
+    words = set(_words(query)) - _FILLER
+
+    def score(name: str) -> tuple[int, float]:
+        return (len(words & set(_words(name))), difflib.SequenceMatcher(None, query.lower(), name.lower()).ratio())
+
+    return sorted(names, key=score, reverse=True)[:n]
+
+
 def _summary(value: Any, limit: int = 160) -> str:
     if isinstance(value, np.ndarray):
         text = np.array2string(np.round(value, 4), separator=", ", threshold=20)
@@ -102,6 +140,8 @@ class PlannerAPI:
         """What the plan said through ``say``."""
         self._footprints = Footprints.from_world(self._world)
         """Table geometry (footprints, surfaces, occupancy, free positions), read live."""
+        self.resolved: list[tuple[str, str]] = []
+        """(name as written, object it was resolved to) for every near-miss name accepted."""
 
     # ================================================================== names
     def _objects(self) -> tuple[ObjectSpec, ...]:
@@ -127,12 +167,18 @@ class PlannerAPI:
         for o in objs:
             if o.name.lower() == key:
                 return o
+        fit = near_miss(obj, objs)
+        if fit is not None:
+            self.resolved.append((obj, fit.name))
+            if self.call_log:  # the call being made: the log shows what the name meant
+                self.call_log[-1].setdefault("resolved", []).append(f"{obj!r} -> {fit.name!r}")
+            return fit
         names = [o.name for o in objs]
-        close = difflib.get_close_matches(obj, names, n=3, cutoff=0.5)
-        hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+        close = _closest(obj, names)
+        hint = f"; closest names: {', '.join(map(repr, close))}" if close else ""
         shown = names[:6]
         more = f" … ({len(names)} objects)" if len(names) > len(shown) else ""
-        raise ValueError(f"unknown object {obj!r}{hint} Valid names: {', '.join(map(repr, shown))}{more}")
+        raise ValueError(f"unknown object {obj!r}{hint}. Valid names: {', '.join(map(repr, shown))}{more}")
 
     # ================================================================== poses
     def _pos(self, oid: int) -> np.ndarray:
@@ -160,6 +206,7 @@ class PlannerAPI:
 
         call.__name__ = call.__qualname__ = name
         call.__doc__ = fn.__doc__
+        call.__wrapped__ = fn  # type: ignore[attr-defined]  # its signature, for error messages
         return call
 
     def log_text(self) -> str:
@@ -167,6 +214,8 @@ class PlannerAPI:
         lines = []
         for e in self.call_log:
             out = f"-> {e['result']}" if "result" in e else f"!! {e.get('error', '(running)')}"
+            if e.get("resolved"):
+                out += f"  (resolved {', '.join(e['resolved'])})"
             lines.append(f"[{e['i']:3d} t={e['sim_time']:.2f}s] {e['fn']}({', '.join(e['args'])}) {out}")
         return "\n".join(lines)
 

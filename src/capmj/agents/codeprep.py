@@ -1,8 +1,11 @@
 """Static preparation of LLM-written code before it reaches the sandbox.
 
 Completions are not run as written: import lines that merely echo the prompt header are
-dropped, and calls of functions nobody defined are found so that ``parse_function`` can write
-them (see :class:`capmj.agents.lmp.LMPSession`).  All of that is pure AST work on source text,
+dropped (also star imports of provided modules, ``from shapely.geometry import *``), and calls
+of functions nobody defined are found so that ``parse_function`` can write them (see
+:class:`capmj.agents.lmp.LMPSession`) -- except names that belong to the API, the LMPs, the
+sandbox or the episode (:data:`RESERVED`), which are never invented: calling one where it is not
+available is a PlanError saying why and what exists.  All of that is pure AST work on source text,
 with no LLM or environment involved, so it lives here and can be tested on its own.  Everything
 is line-preserving where it matters: the sandbox reports errors by line of the submitted code.
 """
@@ -18,6 +21,7 @@ from capmj.agents.sandbox.checks import bound_names
 from capmj.errors import PlanError
 
 __all__ = [
+    "RESERVED",
     "SANDBOX_GLOBALS",
     "bound_names",
     "function_defs",
@@ -33,6 +37,26 @@ SANDBOX_GLOBALS = PROVIDED_NAMES
 # rejects it (and ends the attempt with a recorded error).
 _BENIGN_MODULES = frozenset({"numpy", "math", "itertools", "shapely", "shapely.geometry",
                              "shapely.affinity", "env_utils", "plan_utils", "utils"})
+# ``from M import *`` is dropped for these: every public name code uses from them is provided
+# (shapely's geometry classes and affinity functions are globals; the API modules are the env).
+_STAR_MODULES = frozenset({"shapely.geometry", "shapely.affinity", "env_utils", "plan_utils", "utils"})
+
+RESERVED: dict[str, str] = {
+    "put_first_on_second": "it moves the robot, and only the plan may move the robot",
+    "stack_objects_in_order": "it moves the robot, and only the plan may move the robot",
+    "parse_obj_name": "it is a helper LMP that only the plan may call: "
+                      "parse_obj_name(description, context=None) returns object names",
+    "parse_position": "it is a helper LMP that only the plan may call: "
+                      "parse_position(description, context=None) returns a position or pose",
+    "parse_function": "it writes missing functions before code runs; code does not call it",
+    "parse_completion": "it is the reporter's checker, run by the benchmark after the plan",
+    "tabletop_ui": "it is the planner itself; write the plan's statements directly",
+    "reset": "the benchmark resets the scene between attempts; code cannot reset it",
+    "run_code": "code cannot run code",
+    "exec_safe": "code cannot run code",
+}
+"""Names never synthesised by ``parse_function``, with the reason shown when code calls one
+where it is not available (API functions absent from a helper's env are added by the session)."""
 
 
 def undefined_calls(code: str, known: set[str] | frozenset[str]) -> list[tuple[str, int, str]]:
@@ -88,8 +112,10 @@ def strip_benign_imports(code: str, available: set[str] | frozenset[str]) -> tup
             ok = all(a.name in _BENIGN_MODULES and (a.asname or a.name).split(".")[0] in have
                      for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            ok = (node.level == 0 and node.module in _BENIGN_MODULES
-                  and all(a.name != "*" and (a.asname or a.name) in have for a in node.names))
+            star = [a.name for a in node.names] == ["*"]
+            ok = node.level == 0 and (
+                node.module in _STAR_MODULES if star else
+                node.module in _BENIGN_MODULES and all((a.asname or a.name) in have for a in node.names))
         else:
             continue
         if ok:
@@ -106,8 +132,12 @@ def strip_benign_imports(code: str, available: set[str] | frozenset[str]) -> tup
     return "\n".join(lines) + "\n", removed
 
 
-def function_defs(code: str, wanted: str) -> str:
-    """Only the top-level function definitions of ``code``; one of them must be ``wanted``."""
+def function_defs(code: str, wanted: str, skip: set[str] | frozenset[str] = frozenset()) -> str:
+    """Only the top-level function definitions of ``code``; one of them must be ``wanted``.
+
+    Definitions of names in ``skip`` (the API, the LMPs, reserved names) are dropped: the model
+    re-defining ``get_obj_pos`` or ``put_first_on_second`` must not replace the real one.
+    """
     try:
         tree = ast.parse(code)
     except SyntaxError as exc:
@@ -117,7 +147,7 @@ def function_defs(code: str, wanted: str) -> str:
     parts: list[str] = []
     names: list[str] = []
     for node in tree.body:
-        if isinstance(node, ast.FunctionDef):
+        if isinstance(node, ast.FunctionDef) and node.name not in skip:
             start = min([d.lineno for d in node.decorator_list] + [node.lineno])
             parts.append("\n".join(lines[start - 1:node.end_lineno]))
             names.append(node.name)

@@ -40,6 +40,8 @@ from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError, LLMError, PlanError
 from capmj.llm import LLMClient, LLMConfig
+from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.tasks.protocol import episode_rng
 
 __all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_TEMPERATURE", "LLMAgent",
            "ON_UNKNOWN"]
@@ -94,8 +96,8 @@ class LLMAgent:
     name = "llm"
 
     def __init__(self, model: str = "gpt-4o-mini", api_base: str | None = None, reporter: str = "none",
-                 attempts: int = 1, temperature: float = 0.0, timeout_s: float = 60.0,
-                 cache_dir: str | Path | None = None, max_tokens: int = 2048, *,
+                 attempts: int = 1, temperature: float = 0.0, timeout_s: float = DEFAULT_TIMEOUT_S,
+                 cache_dir: str | Path | None = None, max_tokens: int = 2048, *, cache_only: bool = False,
                  api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
                  max_fn_depth: int = 3, prompts_dir: str | Path | None = None, on_unknown: str = "replan",
@@ -122,7 +124,8 @@ class LLMAgent:
             cache_dir = os.environ[CACHE_ENV].strip()
         self.config = LLMConfig(model=model, api_base=api_base, api_key=api_key, temperature=float(temperature),
                                 max_tokens=int(max_tokens), timeout_s=float(timeout_s), max_retries=int(max_retries),
-                                backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None)
+                                backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None,
+                                cache_only=bool(cache_only))
         self.reporter = reporter
         self.attempts = attempts
         self.on_unknown = on_unknown
@@ -213,7 +216,8 @@ class LLMAgent:
         api = PlannerAPI(ctx)
         session = LMPSession(complete=complete, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
-                             lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
+                             lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
+                             rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
         before = [list(c.records) for c in clients]
         record: dict[str, Any] = {
             "attempt": k, "reset": k > 1,

@@ -23,11 +23,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from capmj.agents.codeprep import (SANDBOX_GLOBALS, bound_names, function_defs, strip_benign_imports,
-                                   undefined_calls)
+import numpy as np
+
+from capmj.agents.codeprep import (RESERVED, SANDBOX_GLOBALS, bound_names, function_defs,
+                                   strip_benign_imports, undefined_calls)
 from capmj.agents.prompt_files import (META, QUESTION, Example, PromptFile, load_prompt,
                                        load_system_prompt, object_names, prompts_dir)
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
+from capmj.agents.sandbox.runtime import WRITTEN_END, WRITTEN_START, located_error
 from capmj.errors import LLMError, PlanError
 from capmj.record import NullRecorder, Recorder
 
@@ -110,7 +113,8 @@ class LMPSession:
 
     ``api`` maps API function names to callables (``PlannerAPI(ctx).functions()``);
     ``objects_text`` returns the current ``"objects = [...]"`` line.  ``complete(messages,
-    purpose)`` is the LLM (``LLMClient.complete``).
+    purpose)`` is the LLM (``LLMClient.complete``).  ``rng`` feeds ``np.random`` in all code of
+    the attempt (the agent passes one derived from the episode seed and the attempt).
     """
 
     complete: Callable[..., Any]
@@ -122,6 +126,7 @@ class LMPSession:
     directory: Path | None = None
     lmp_budget: SandboxBudget = field(default_factory=lambda: SandboxBudget(wall_s=20.0))
     max_fn_depth: int = 3
+    rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
     _counters: dict[str, int] = field(default_factory=dict)
     _system: str | None = None
 
@@ -179,8 +184,25 @@ class LMPSession:
         return env
 
     # -- code preparation --------------------------------------------------------------------
+    def reserved(self) -> dict[str, str]:
+        """Names never synthesised: :data:`RESERVED` plus every API function."""
+        why = {n: "it is a read-only API function" for n in self.api}
+        return {**why, **RESERVED}
+
+    def refuse_reserved(self, missing: list[tuple[str, int, str]], env: Mapping[str, Any],
+                        code: str, program: str) -> None:
+        """PlanError for the first call of a reserved name that ``env`` does not provide."""
+        reserved = self.reserved()
+        for name, line, _site in missing:
+            if name in reserved:
+                have = sorted(n for n, v in env.items() if callable(v))
+                raise located_error(
+                    PlanError, f"NameError: {name}() cannot be called in {program}: "
+                    f"{reserved[name]}. Functions available here: {', '.join(have)}",
+                    line=line, code=code, program=program)
+
     def prepare(self, code: str, env: Mapping[str, Any], *, depth: int = 0,
-                parent: LMPCall | None = None) -> str:
+                parent: LMPCall | None = None, program: str = "the code") -> str:
         """Drop benign imports, then prepend functions synthesised for undefined calls."""
         code, removed = strip_benign_imports(code, set(env))
         if removed and parent is not None:
@@ -189,26 +211,37 @@ class LMPSession:
         missing = undefined_calls(code, set(env))
         if not missing:
             return code
-        functions = self.synthesize(missing, set(env) | bound_names(ast.parse(code)), depth=depth)
-        header = "# --- functions written by parse_function ---\n"
-        return header + functions + "# --- end of written functions ---\n" + code
+        self.refuse_reserved(missing, env, code, program)
+        functions = self.synthesize(missing, set(env) | bound_names(ast.parse(code)), depth=depth,
+                                    env=env, code=code, program=program)
+        return f"{WRITTEN_START}\n{functions}{WRITTEN_END}\n{code}"
 
-    def synthesize(self, missing: list[tuple[str, int, str]], known: set[str], *, depth: int) -> str:
+    def synthesize(self, missing: list[tuple[str, int, str]], known: set[str], *, depth: int,
+                   env: Mapping[str, Any] | None = None, code: str = "",
+                   program: str = "the code") -> str:
         """Source of the functions ``missing`` needs (and of helpers they call), depth-bounded."""
+        env = env if env is not None else {}
         if depth >= self.max_fn_depth:
             names = ", ".join(m[0] for m in missing)
             raise PlanError(f"NameError: function synthesis depth {self.max_fn_depth} reached; "
                             f"undefined: {names}")
         out: list[str] = []
         known = set(known)
-        for name, _line, site in missing:
+        for name, line, site in missing:
             if name in known:
                 continue
-            source = self.parse_function(name, site)
+            try:
+                source = self.parse_function(name, site)
+            except PlanError as exc:
+                raise located_error(PlanError, f"parse_function could not write {name}(): {exc}",
+                                    line=line, code=code, program=program) from exc
             known.add(name)
             inner = undefined_calls(source, known)
             if inner:
-                helper_src = self.synthesize(inner, known, depth=depth + 1)
+                where = f"the function {name}() written by parse_function"
+                self.refuse_reserved(inner, env, source, where)
+                helper_src = self.synthesize(inner, known, depth=depth + 1, env=env, code=source,
+                                             program=where)
                 known |= bound_names(ast.parse(helper_src))
                 out.append(helper_src)
             out.append(source)
@@ -222,12 +255,14 @@ class LMPSession:
         rejected or failing program is recorded on the call and re-raised as ``PlanError``.
         """
         text = self.ask(call, self.messages(self.prompt(lmp).render(question)))
+        program = f"the code {lmp} wrote"
         try:
             code = extract_code(text)
             env = self.helper_env(question)
-            code = self.prepare(code, env, parent=call)
+            code = self.prepare(code, env, parent=call, program=program)
             self.record(call, "code", code)
-            return run_code(code, env, budget=self.lmp_budget, filename=f"<{lmp} {self.attempt}.{call.n}>")
+            return run_code(code, env, budget=self.lmp_budget, filename=f"<{lmp} {self.attempt}.{call.n}>",
+                            program=program, rng=self.rng)
         except PlanError as exc:
             self.record(call, "error", f"{type(exc).__name__}: {exc}")
             raise
@@ -264,7 +299,7 @@ class LMPSession:
         text = self.ask(call, self.messages(self.prompt("parse_function").render(question)))
         try:
             code = extract_code(text)
-            source = function_defs(code, name)
+            source = function_defs(code, name, skip=set(self.reserved()))
         except PlanError as exc:
             self.record(call, "error", f"{type(exc).__name__}: {exc}")
             raise

@@ -28,10 +28,11 @@ from capmj.errors import PlanError
 __all__ = ["DEFAULT_PLAN_BUDGET", "Feedback", "PlanOutcome", "build_messages", "feedback_text", "plan_and_run",
            "plan_key"]
 
-DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=900.0, max_api_calls=2000)
-"""Physics is budgeted in simulation steps and primitives by the episode context; the wall time
-here only stops code that hangs, and it includes the helper LMP calls a plan makes (LLM latency),
-so it is generous."""
+DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=60.0, max_api_calls=2000, max_lines=100_000)
+"""Deterministic: 100 000 executed lines (loop iterations included), 2000 API calls, the
+sandbox's element caps; physics is budgeted in simulation steps and primitives by the episode
+context.  The wall time is a backstop for the plan's own Python only: time inside API functions
+(simulation, helper LMP calls waiting on the LLM) is not counted."""
 
 
 @dataclass(frozen=True)
@@ -157,9 +158,10 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
     env["goal"] = goal
     try:
         code = out.code = extract_code(out.completion)
-        code = out.code = session.prepare(code, env, parent=call)
+        code = out.code = session.prepare(code, env, parent=call, program="the plan")
         session.record(call, "code", code)
-        run_code(code, env, budget=budget, filename=f"<plan attempt {session.attempt}>", output=out.output)
+        run_code(code, env, budget=budget, filename=f"<plan attempt {session.attempt}>", output=out.output,
+                 program="the plan", rng=session.rng)
     except PlanError as exc:
         session.record(call, "error", f"{type(exc).__name__}: {exc}")
         raise

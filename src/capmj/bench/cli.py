@@ -22,7 +22,10 @@ from capmj.errors import CapmjError, ConfigError
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
-LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
+               "timeout_s", "cache_dir", "cache_only")
+CONFIRM_LLM_EPISODES = 100
+"""More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
 
 EPILOG = """\
 examples:
@@ -64,6 +67,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="what an unknown reporter verdict does (default: replan)")
     g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
                    help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
+    g.add_argument("--llm-timeout", dest="timeout_s", type=float, default=None, metavar="S",
+                   help="seconds per LLM request before it is retried (default 300: slow local servers)")
+    g.add_argument("--llm-cache", dest="cache_dir", default=None, metavar="DIR",
+                   help="cache completions in DIR (default: $CAPMJ_LLM_CACHE); reruns replay them")
+    g.add_argument("--cache-only", dest="cache_only", action="store_true", default=None,
+                   help="answer only from the cache: a missing entry fails the episode, no live call")
+    g.add_argument("--yes", action="store_true", help=f"start more than {CONFIRM_LLM_EPISODES} LLM episodes "
+                   "on the default seeds without asking")
     p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
@@ -209,6 +220,17 @@ def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
     return names, registered
 
 
+def _confirm_llm_grid(args: argparse.Namespace, agent: str, n: int) -> None:
+    """Ask before a default-seed LLM grid of more than CONFIRM_LLM_EPISODES episodes starts."""
+    if agent != "llm" or n <= CONFIRM_LLM_EPISODES or args.seeds is not None or args.yes or args.resume:
+        return
+    what = f"this would start {n} LLM episodes on the default test seeds ({TEST_SEEDS})"
+    if sys.stdin is not None and sys.stdin.isatty():
+        if input(f"capmj-bench: {what}. Continue? [y/N] ").strip().lower() in ("y", "yes"):
+            return
+    raise ConfigError(f"{what}; give --seeds explicitly (e.g. --seeds 10001:10011:2) or add --yes")
+
+
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.agents.factory import make_agent
     from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
@@ -256,6 +278,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     seeds = parse_seeds(seeds_sel)
     tasks, registered = _resolve_tasks(tasks_sel)
     agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
+    _confirm_llm_grid(args, agent_name, len(tasks) * len(seeds))
     agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
     _prepare_out(out)
 

@@ -24,7 +24,12 @@ from typing import Any
 from capmj.errors import ConfigError, LLMError
 from capmj.llm.cache import CompletionCache, cache_key
 
-__all__ = ["CallRecord", "Completion", "LLMClient", "LLMConfig", "Usage", "image_part", "text_part"]
+__all__ = ["CallRecord", "Completion", "DEFAULT_TIMEOUT_S", "LLMClient", "LLMConfig", "Usage", "image_part",
+           "text_part"]
+
+DEFAULT_TIMEOUT_S = 300.0
+"""Per-request timeout.  Generous on purpose: a 1.5B model on 2 CPU cores needs 40-90 s for a cold
+2k-token planner prompt and ~10 tokens/s of output; a cloud provider that hangs still ends."""
 
 Message = Mapping[str, Any]
 
@@ -59,11 +64,13 @@ class LLMConfig:
     api_key: str | None = None
     temperature: float = 0.0
     max_tokens: int = 2048
-    timeout_s: float = 60.0
+    timeout_s: float = DEFAULT_TIMEOUT_S
     max_retries: int = 3
     backoff_s: float = 1.0
     cache_dir: Path | None = None
     mock_response: str | None = None
+    cache_only: bool = False
+    """Answer only from ``cache_dir``: a missing entry is an LLMError, never a live call."""
 
     def __post_init__(self) -> None:
         if not self.model:
@@ -74,6 +81,8 @@ class LLMConfig:
             raise ConfigError("LLMConfig: max_retries and backoff_s must be >= 0, max_tokens > 0")
         if self.cache_dir is not None and not isinstance(self.cache_dir, Path):
             object.__setattr__(self, "cache_dir", Path(self.cache_dir))
+        if self.cache_only and self.cache_dir is None:
+            raise ConfigError("LLMConfig.cache_only needs cache_dir (the folder to replay from)")
 
     @property
     def resolved_api_key(self) -> str | None:
@@ -247,6 +256,12 @@ class LLMClient:
                 )
                 self._record(hit, purpose=purpose, latency=hit.latency_s, attempts=0)
                 return hit
+            if cfg.cache_only:
+                error = LLMError(f"cache-only: no cached completion for {purpose or 'this request'} "
+                                 f"(key {key[:12]}... under {cfg.cache_dir}); no live call was made. "
+                                 "Rerun without cache-only to ask the model.")
+                self._record(None, purpose=purpose, latency=0.0, attempts=0, error=str(error))
+                raise error
         _import_litellm()  # seconds on first use; not part of the call's latency
         start = time.monotonic()
         result, attempts, error = self._call_with_retries(messages, mock)

@@ -10,14 +10,16 @@ So each run goes through four layers:
    ``_private`` attribute and known dangerous names/attributes are rejected with their line.
 2. **Rewrite**: ``*``, ``**``, ``<<`` and ``+`` (and their augmented forms) become calls of
    guards that refuse results above ``max_elements`` elements / 10**6 bits *before* computing
-   them; every ``while`` body ticks the clock; a few growing methods (``arr.repeat``,
+   them; every ``while`` iteration counts as an executed line; set displays become
+   insertion-ordered sets (same iteration order in every process); a few growing methods (``arr.repeat``,
    ``s.ljust``, ``sep.join`` ...) are checked.  Guard names start with ``__`` which user code
    can never write, because the check runs first.
 3. **Facades, not modules**: ``np``, ``math``, ``itertools``, ``shapely`` are read-only
    namespaces of vetted functions; allocating numpy constructors and infinite iterators are
    size-capped.  Builtins are a fresh curated dict each run, so nothing leaks between runs.
-4. **Budgets at run time**: a ``sys.settrace`` tracer (only sandbox frames) enforces wall time
-   and optional executed-line counts; env functions count API calls.  Violations raise an
+4. **Budgets at run time**, deterministic first: a ``sys.settrace`` tracer (only sandbox
+   frames) counts executed lines, the guards sum allocated elements, env functions count API
+   calls; wall time is a backstop that stops while env functions run.  Violations raise an
    internal ``BaseException`` that ``except Exception`` cannot swallow.
 
 Everything surfaces as :class:`PlanError` / :class:`BudgetExceeded` ("ErrorClass: message",

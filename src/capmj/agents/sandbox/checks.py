@@ -4,7 +4,8 @@
 could reach the interpreter (imports, classes, dunder names, ``_private`` attributes, known
 dangerous names and attributes); :class:`_Rewriter` then routes the operations that can grow
 without bound (``*``, ``**``, ``<<``, ``+``, growing methods, ``while`` loops, ``except``
-handlers) through ``__cap_*`` guards provided at run time.  Both live together because the
+handlers) through ``__cap_*`` guards provided at run time, and makes set displays
+insertion-ordered sets.  Both live together because the
 rewrite is only sound on checked code: user code can never write a ``__`` name, so it cannot
 shadow or call the guards itself.
 """
@@ -18,7 +19,7 @@ from capmj.errors import PlanError
 
 FORBIDDEN_NAMES = frozenset({
     "exec", "eval", "compile", "open", "globals", "locals", "vars", "dir", "getattr", "setattr",
-    "delattr", "hasattr", "input", "breakpoint", "help", "memoryview", "type", "object",
+    "delattr", "hasattr", "input", "breakpoint", "help", "memoryview", "object",
     "super", "classmethod", "staticmethod", "property", "exit", "quit", "BaseException",
 })
 """Rejected wherever the code reads them without binding them itself (none is a builtin here)."""
@@ -178,6 +179,15 @@ class _Rewriter(ast.NodeTransformer):
         if isinstance(node.ctx, ast.Load) and node.attr in _GROWING_METHODS:
             return _helper_call("__cap_attr", [node.value, ast.Constant(node.attr)], node)
         return node
+
+    def visit_Set(self, node: ast.Set) -> ast.AST:
+        self.generic_visit(node)  # {a, b}: an insertion-ordered set (see sandbox.ordered)
+        return _helper_call("__cap_set", [ast.copy_location(ast.List(node.elts, ast.Load()), node)], node)
+
+    def visit_SetComp(self, node: ast.SetComp) -> ast.AST:
+        self.generic_visit(node)
+        gen = ast.copy_location(ast.GeneratorExp(node.elt, node.generators), node)
+        return _helper_call("__cap_set", [gen], node)
 
     def visit_While(self, node: ast.While) -> ast.AST:
         self.generic_visit(node)

@@ -3,7 +3,10 @@
 Plan code never sees a real module: ``np``, ``math``, ``itertools`` and ``shapely`` are
 :class:`_Facade` namespaces of vetted functions, numpy constructors and ``math`` functions with
 huge C loops are size-checked before they run, infinite iterators are bounded, and builtins are
-a fresh curated dict per run so tampering cannot leak between runs.  The builders take the run's
+a fresh curated dict per run so tampering cannot leak between runs.  ``np.random`` draws from
+the generator the caller passes (the episode's), never from numpy's global state, so the same
+code gives the same numbers in every process; ``set``/``frozenset`` are insertion-ordered
+(:mod:`capmj.agents.sandbox.ordered`) and ``type(x)`` answers with one argument only.  The builders take the run's
 session (:class:`~capmj.agents.sandbox.runtime._Session`) as a parameter, so this module does
 not import the runtime and there is no import cycle.
 """
@@ -21,6 +24,8 @@ from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as _np
+
+from capmj.agents.sandbox.ordered import OrderedFrozenSet, OrderedSet
 
 if TYPE_CHECKING:
     from capmj.agents.sandbox.runtime import _Session
@@ -84,6 +89,12 @@ class _TypeCheck:
 
     def __instancecheck__(self, obj: object) -> bool:
         return isinstance(obj, self._real)
+
+    def __eq__(self, other: object) -> bool:  # type(x) == np.ndarray, type(a) == type(b)
+        return self._real is (other._real if isinstance(other, _TypeCheck) else other)
+
+    def __hash__(self) -> int:
+        return hash(self._real)
 
     def __call__(self, *args: object, **kwargs: object) -> None:
         raise TypeError(f"{self._name} cannot be constructed in the sandbox; use np.array")
@@ -199,10 +210,55 @@ def _guarded(session: _Session, fn: Callable[..., Any], size: Callable[..., int]
             n = size(*args, **kwargs)
         except (TypeError, ValueError, OverflowError, ZeroDivisionError):
             n = 0  # malformed arguments: the real function raises its own error
-        session.limit(n, label)
+        session.allocate(n, label)
         return fn(*args, **kwargs)
 
     return wrapper
+
+
+def _size_kw(size: Any = None, **_: Any) -> int:
+    return 1 if size is None else _n_elements(size)
+
+
+def _random_facade(session: _Session, rng: _np.random.Generator) -> _Facade:
+    """``np.random`` over ``rng``: the legacy names LLM code writes, mapped onto the Generator.
+
+    ``seed`` is accepted and ignored and ``default_rng`` returns this facade: draws always come
+    from the episode's generator, so a replayed completion draws the same numbers.
+    """
+    def dims(*d: Any) -> Any:
+        return tuple(d) if d else None
+
+    real: dict[str, tuple[Callable[..., Any], Callable[..., int]]] = {
+        "rand": (lambda *d: rng.random(dims(*d)), lambda *d: _n_elements(tuple(d))),
+        "randn": (lambda *d: rng.standard_normal(dims(*d)), lambda *d: _n_elements(tuple(d))),
+        "random": (lambda size=None: rng.random(size), _size_kw),
+        "randint": (lambda low, high=None, size=None, dtype=int: rng.integers(low, high, size, dtype),
+                    lambda low, high=None, size=None, **k: _size_kw(size)),
+        "integers": (lambda low, high=None, size=None, dtype=_np.int64, endpoint=False:
+                     rng.integers(low, high, size, dtype, endpoint),
+                     lambda low, high=None, size=None, **k: _size_kw(size)),
+        "uniform": (lambda low=0.0, high=1.0, size=None: rng.uniform(low, high, size),
+                    lambda low=0.0, high=1.0, size=None: _size_kw(size)),
+        "normal": (lambda loc=0.0, scale=1.0, size=None: rng.normal(loc, scale, size),
+                   lambda loc=0.0, scale=1.0, size=None: _size_kw(size)),
+        "standard_normal": (lambda size=None: rng.standard_normal(size), _size_kw),
+        "choice": (lambda a, size=None, replace=True, p=None: rng.choice(a, size, replace, p),
+                   lambda a, size=None, **k: max(_size_kw(size), operator.index(a)
+                                                if isinstance(a, int) else 0)),
+        "permutation": (lambda x: rng.permutation(x),
+                        lambda x: operator.index(x) if isinstance(x, int) else int(_np.size(x))),
+        "shuffle": (lambda x: rng.shuffle(x), lambda x: 0),
+    }
+    members: dict[str, object] = {name: _guarded(session, fn, size, f"np.random.{name}()")
+                                  for name, (fn, size) in real.items()}
+    for alias, name in (("random_sample", "random"), ("sample", "random"), ("ranf", "random")):
+        members[alias] = members[name]
+    members["seed"] = lambda *args, **kwargs: None
+    this: list[_Facade] = []
+    members["default_rng"] = lambda *args, **kwargs: this[0]
+    this.append(_Facade("np.random", members))
+    return this[0]
 
 
 def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
@@ -217,8 +273,8 @@ def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
     return wrapper
 
 
-def _facades(session: _Session) -> dict[str, object]:
-    """Fresh facades for one run (they close over the run's budget)."""
+def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
+    """Fresh facades for one run (they close over the run's budget and random generator)."""
     import shapely.affinity
     import shapely.geometry
 
@@ -226,6 +282,7 @@ def _facades(session: _Session) -> dict[str, object]:
     for name, size in _NP_ALLOCATORS.items():
         np_members[name] = _guarded(session, getattr(_np, name), size, f"np.{name}()")
     np_members["ndarray"] = _TypeCheck(_np.ndarray, "np.ndarray")
+    np_members["random"] = _random_facade(session, rng)
     np_members["linalg"] = _Facade("np.linalg", {n: getattr(_np.linalg, n)
                                                 for n in ("norm", "inv", "det", "solve")})
 
@@ -272,7 +329,7 @@ _GEOMETRY_NAMES = ("Point", "Polygon", "LineString", "MultiPoint", "MultiPolygon
 _AFFINITY_NAMES = ("rotate", "translate", "scale")
 
 PROVIDED_NAMES: frozenset[str] = frozenset(
-    ("np", "math", "itertools", "shapely", "print", "range", "True", "False", "None")
+    ("np", "math", "itertools", "shapely", "print", "range", "type", "True", "False", "None")
     + _GEOMETRY_NAMES + _AFFINITY_NAMES + _SAFE_BUILTINS
 )
 """Every global name ``run_code`` provides besides the caller's ``env`` (facades, shapely
@@ -296,4 +353,27 @@ def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
 
     table["print"] = captured_print
     table["range"] = session.capped_range
+    table["set"], table["frozenset"] = OrderedSet, OrderedFrozenSet
+    table["type"] = _safe_type(table)
     return table
+
+
+_NP_TYPES = frozenset(getattr(_np, n) for n in ("float32", "float64", "int32", "int64", "bool_"))
+
+
+def _safe_type(table: Mapping[str, object]) -> Callable[[object], object]:
+    """One-argument ``type``: a real type only for builtins and numpy scalar types the sandbox
+    already exposes, a non-callable stand-in (comparable, usable in ``isinstance``) otherwise."""
+    exposed = {v for v in table.values() if isinstance(v, type)} | _NP_TYPES
+
+    def type_(*args: object) -> object:
+        if len(args) != 1:
+            raise TypeError("type() takes exactly one argument in the sandbox (it cannot create classes)")
+        kind = type(args[0])
+        if kind in exposed:
+            return kind
+        name = "np.ndarray" if kind is _np.ndarray else f"{kind.__module__}.{kind.__qualname__}"
+        return _TypeCheck(kind, name)
+
+    type_.__name__ = type_.__qualname__ = "type"
+    return type_
