@@ -78,8 +78,12 @@ def _names(tree: ast.AST) -> list[str]:
             a = node.attr
             if (a.startswith("__") and a not in _DUNDER_OK) or a in FORBIDDEN_ATTRIBUTES:
                 bad.append(f"line {node.lineno}: attribute {a!r} is not allowed in a task")
-            elif a == "random" and isinstance(node.value, ast.Name) and node.value.id in ("np", "numpy"):
-                bad.append(f"line {node.lineno}: np.random is global state; draw from the rng argument")
+            elif (a != "Generator" and isinstance(node.value, ast.Attribute) and node.value.attr == "random"
+                  and isinstance(node.value.value, ast.Name) and node.value.value.id in ("np", "numpy")):
+                bad.append(f"line {node.lineno}: np.random.{a} is global or unseeded state; draw from the rng argument")
+        elif isinstance(node, ast.ImportFrom) and node.module == "numpy.random":
+            if any(n.name != "Generator" for n in node.names):
+                bad.append(f"line {node.lineno}: numpy.random functions are global state; draw from the rng argument")
     return bad
 
 
