@@ -207,7 +207,7 @@ def run_candidate(ctx: Context, index: int) -> CandidateRecord:
         rec.stage, rec.accepted = "accepted", True
         rec.reason = f"all checks passed (oracle rate {rec.oracle_rate:.2f}); reflection: {rec.reflection['vote']}"
         return rec
-    except (LLMError, ValueError, TypeError, CapmjError) as e:
+    except (LLMError, ValueError, CapmjError) as e:
         rec.reason = f"{rec.stage}: {type(e).__name__}: {e}"[:800]
         return rec
     finally:

@@ -31,12 +31,12 @@ def read(name: str) -> str:
         raise ConfigError(f"generator prompt {path} not found (set CAPMJ_PROMPTS_DIR to a capmj prompts folder)") from None
 
 
-def render(name: str, **values: Any) -> str:
-    """Prompt file ``name`` with every ``$placeholder`` filled; a missing value is a ConfigError."""
+def render(file: str, /, **values: Any) -> str:
+    """Prompt file ``file`` with every ``$placeholder`` filled; a missing value is a ConfigError."""
     try:
-        return Template(read(name)).substitute({k: str(v) for k, v in values.items()}).strip()
+        return Template(read(file)).substitute({k: str(v) for k, v in values.items()}).strip()
     except KeyError as e:
-        raise ConfigError(f"generator prompt {name} needs a value for ${e.args[0]}") from None
+        raise ConfigError(f"generator prompt {file} needs a value for ${e.args[0]}") from None
 
 
 def proposal_examples() -> dict[str, list[dict[str, Any]]]:
