@@ -36,7 +36,6 @@ from capmj.sim.palette import COOL, WARM
 from capmj.taskcheck import CheckResult
 from capmj.tasks.spawn import DEFAULT_COLORS
 
-STAGES = ("propose", "examples", "write", "static", "runtime", "reflection", "accepted")
 STATIC_IN_WORKER = ("load", "protocol")
 
 
@@ -219,4 +218,4 @@ def run_candidate(ctx: Context, index: int) -> CandidateRecord:
         rec.conversation = str(log.relative_to(cfg.out))
 
 
-__all__ = ["CandidateRecord", "Context", "STAGES", "run_candidate"]
+__all__ = ["CandidateRecord", "Context", "run_candidate"]

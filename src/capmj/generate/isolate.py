@@ -37,10 +37,6 @@ class IsolatedRun:
     ended: str
     wall_s: float
 
-    @property
-    def passed(self) -> bool:
-        return len(self.results) == len(ORDER) and all(r.passed for r in self.results)
-
 
 def _limit(limits: Limits):
     def apply() -> None:  # runs in the child between fork and exec
