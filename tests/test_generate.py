@@ -202,3 +202,12 @@ def test_endless_generate_killed_by_cpu_limit_and_recorded(tmp_path):
     assert checks_of(rec)["oracle_solves"]["outcome"] == "skip"
     line = json.loads((result.out / "generation.jsonl").read_text())
     assert line["stage"] == "runtime" and "CPU-time limit" in line["reason"]
+
+
+def test_cli_runs_a_generation_and_prints_verdicts(tmp_path, capsys):
+    with StubLLMServer(responder=GeneratorScript([candidate("broken_import_os.py")])) as server:
+        code = cli_main(["--mode", "bottom-up", "--n", "1", "--model", "openai/stub", "--api-base", server.base_url,
+                         "--out", str(tmp_path / "out"), "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 0 and "broken-import-os" in out and "rejected at static" in out and "0 of 1 accepted" in out
+    assert json.loads((tmp_path / "out" / "generation.jsonl").read_text())["stage"] == "static"
