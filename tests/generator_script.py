@@ -71,7 +71,7 @@ class GeneratorScript:
     def _about(self, request: dict[str, Any]) -> ScriptedCandidate:
         text = prompt_text(request)
         for c in self.candidates:
-            if f'"name": "{c.name}"' in text:
+            if f'"name": "{c.name}"' in text or f"  name: {c.name}\n" in text:  # proposal JSON or task_api.txt
                 return c
         raise AssertionError(f"no scripted candidate in conversation: {text[:300]!r}")
 

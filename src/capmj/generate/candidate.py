@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from capmj.errors import CapmjError, LLMError
+from capmj.errors import CapmjError
 from capmj.generate import prompts
 from capmj.generate.config import GENERATED_TAG, NAME_RE, GenerateConfig
 from capmj.generate.conversation import Conversation
@@ -89,9 +89,9 @@ def _proposal_lines(items: list[dict[str, Any]]) -> str:
 def _propose(ctx: Context, conv: Conversation, rec: CandidateRecord) -> dict[str, Any]:
     cfg = ctx.cfg
     if cfg.mode == "top-down":
-        prop = {"name": cfg.name, "goal": cfg.description, "objects": [], "why": "requested by the user"}
-        conv.note(f"The user asks for this task (candidate {rec.index + 1} of {cfg.n}): {json.dumps(prop)}")
-        return prop
+        # the candidate number makes the N conversations differ (else the cache answers all alike)
+        return {"name": cfg.name, "goal": cfg.description, "objects": [],
+                "why": f"requested by the user (candidate {rec.index + 1} of {cfg.n})"}
     ex = prompts.proposal_examples()
     text = prompts.render(
         "propose.txt", index=rec.index + 1, count=cfg.n, kinds=", ".join(KINDS), sizes=", ".join(BLOCK_SIZES),
@@ -132,13 +132,74 @@ def _failure(results: list[CheckResult]) -> CheckResult | None:
     return next((r for r in results if r.outcome in ("fail", "error")), None)
 
 
+def _checked(ctx: Context, conv: Conversation, rec: CandidateRecord, code: str) -> int | None:
+    """Static then runtime checks, with one repair round on a static failure.
+
+    Returns the attempt whose checks all passed, or None (``rec.reason`` says why).
+    """
+    cfg, name = ctx.cfg, rec.proposal["name"]
+    path = ctx.workdir / "candidates" / f"{rec.index:03d}-{name}.py"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rec.code_path = str(path.relative_to(cfg.out))
+    for attempt in (1, 2):
+        rec.stage = "static"
+        path.write_text(code, encoding="utf-8")
+        static = list(static_checks(code))
+        for r in static:
+            rec.check("static", attempt, r)
+        bad, run = _failure(static), None
+        if bad is None:  # only now does the code run: in the limited worker
+            run = run_isolated(path, name=name, seeds=tuple(range(cfg.seeds)), accept_rate=cfg.accept_rate,
+                               tags=(GENERATED_TAG,), limits=cfg.limits)
+            rec.wall_s["checks"] = rec.wall_s.get("checks", 0.0) + run.wall_s
+            for r in run.results:
+                rec.check("static" if r.name in STATIC_IN_WORKER else "runtime", attempt, r)
+            bad = _failure([r for r in run.results if r.name in STATIC_IN_WORKER])
+        if bad is not None:
+            if attempt == 2:
+                rec.reason = f"static check {bad.name} failed after the repair round: {bad.detail}"
+                return None
+            error = bad.detail + (f"\n{bad.data['traceback']}" if bad.data.get("traceback") else "")
+            code = extract_code(conv.ask(prompts.render("repair.txt", check=bad.name, error=error), "generate.repair"))
+            rec.repaired = True
+            continue
+        assert run is not None
+        rec.stage = "runtime"
+        by = {r.name: r for r in run.results}
+        if "rate" in by["oracle_solves"].data:
+            rec.oracle_rate = float(by["oracle_solves"].data["rate"])
+        rec.goals = list(by["scenes"].data.get("goals", []))
+        bad = _failure(list(run.results))
+        if bad is not None:
+            rec.reason = f"runtime check {bad.name}: {bad.detail}"
+            return None
+        return attempt
+    return None  # pragma: no cover - the loop always returns
+
+
+def _reflect(ctx: Context, conv: Conversation, rec: CandidateRecord, attempt: int) -> None:
+    """Ask for the vote and record it; a ``reject`` vote rejects, anything else leaves the checks' verdict."""
+    rec.stage = "reflection"
+    lines = "\n".join(f"- {c['name']}: {c['detail']}" for c in rec.checks if c["outcome"] == "pass" and c["attempt"] == attempt)
+    answer = conv.ask(prompts.render("reflect.txt", name=rec.name, checks=lines,
+                                     existing=", ".join(t.name for t in ctx.library)), "generate.reflect")
+    try:
+        vote = extract_json(answer)
+        rec.reflection = {"vote": str(vote.get("vote", "")).lower(), "reason": str(vote.get("reason", ""))}
+    except (ValueError, AttributeError):
+        rec.reflection = {"vote": "unreadable", "reason": answer[:300]}
+    if rec.reflection["vote"] == "reject":
+        rec.reason = f"reflection voted reject: {rec.reflection['reason']}"
+        return
+    rec.stage, rec.accepted = "accepted", True
+    rec.reason = f"all checks passed (oracle rate {rec.oracle_rate:.2f}); reflection: {rec.reflection['vote']}"
+
+
 def run_candidate(ctx: Context, index: int) -> CandidateRecord:
     """Take candidate ``index`` through every stage; never raises for the candidate's own faults."""
-    cfg = ctx.cfg
-    rec = CandidateRecord(index, cfg.mode)
+    rec = CandidateRecord(index, ctx.cfg.mode)
     conv = Conversation(ctx.client, prompts.read("system.txt").strip())
     t0 = time.perf_counter()
-    check_s = 0.0
     try:
         prop = _propose(ctx, conv, rec)
         rec.proposal, rec.name = prop, prop["name"]
@@ -150,72 +211,19 @@ def run_candidate(ctx: Context, index: int) -> CandidateRecord:
         rec.examples = _pick_examples(ctx, conv, prop)
         rec.stage = "write"
         code = _write(ctx, conv, prop, rec.examples)
-        stem = f"{index:03d}-{prop['name']}"
-        for attempt in (1, 2):
-            rec.stage = "static"
-            path = ctx.workdir / "candidates" / f"{stem}.py"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(code, encoding="utf-8")
-            rec.code_path = str(path.relative_to(cfg.out))
-            static = list(static_checks(code))
-            for r in static:
-                rec.check("static", attempt, r)
-            bad = _failure(static)
-            run = None
-            if bad is None:
-                t1 = time.perf_counter()
-                run = run_isolated(path, name=prop["name"], seeds=tuple(range(cfg.seeds)), accept_rate=cfg.accept_rate,
-                                   tags=(GENERATED_TAG,), limits=cfg.limits)
-                check_s += time.perf_counter() - t1
-                for r in run.results:
-                    rec.check("static" if r.name in STATIC_IN_WORKER else "runtime", attempt, r)
-                bad = _failure([r for r in run.results if r.name in STATIC_IN_WORKER])
-            if bad is not None:
-                if attempt == 1:
-                    error = bad.detail + (f"\n{bad.data['traceback']}" if bad.data.get("traceback") else "")
-                    code = extract_code(conv.ask(prompts.render("repair.txt", check=bad.name, error=error), "generate.repair"))
-                    rec.repaired = True
-                    continue
-                rec.reason = f"static check {bad.name} failed after the repair round: {bad.detail}"
-                return rec
-            assert run is not None
-            rec.stage = "runtime"
-            oracle = next((r for r in run.results if r.name == "oracle_solves"), None)
-            if oracle is not None and "rate" in oracle.data:
-                rec.oracle_rate = float(oracle.data["rate"])
-            scenes = next((r for r in run.results if r.name == "scenes"), None)
-            rec.goals = list(scenes.data.get("goals", [])) if scenes else []
-            bad = _failure(list(run.results))
-            if bad is not None:
-                rec.reason = f"runtime check {bad.name}: {bad.detail}"
-                return rec
-            break
-        rec.stage = "reflection"
-        lines = "\n".join(f"- {c['name']}: {c['detail']}" for c in rec.checks if c["outcome"] == "pass" and c["attempt"] == attempt)
-        existing = ", ".join(t.name for t in ctx.library)
-        answer = conv.ask(prompts.render("reflect.txt", name=prop["name"], checks=lines, existing=existing),
-                          "generate.reflect")
-        try:
-            vote = extract_json(answer)
-            rec.reflection = {"vote": str(vote.get("vote", "")).lower(), "reason": str(vote.get("reason", ""))}
-        except (ValueError, AttributeError):
-            rec.reflection = {"vote": "unreadable", "reason": answer[:300]}
-        if rec.reflection["vote"] == "reject":
-            rec.reason = f"reflection voted reject: {rec.reflection['reason']}"
-            return rec
-        rec.stage, rec.accepted = "accepted", True
-        rec.reason = f"all checks passed (oracle rate {rec.oracle_rate:.2f}); reflection: {rec.reflection['vote']}"
-        return rec
-    except (LLMError, ValueError, CapmjError) as e:
+        attempt = _checked(ctx, conv, rec, code)
+        if attempt is not None:
+            _reflect(ctx, conv, rec, attempt)
+    except (ValueError, CapmjError) as e:  # LLM failures, unusable answers
         rec.reason = f"{rec.stage}: {type(e).__name__}: {e}"[:800]
-        return rec
     finally:
         rec.usage = conv.usage
-        rec.wall_s = {"checks": round(check_s, 3), "total": round(time.perf_counter() - t0, 3)}
+        rec.wall_s = {"checks": round(rec.wall_s.get("checks", 0.0), 3), "total": round(time.perf_counter() - t0, 3)}
         safe = rec.name if isinstance(rec.name, str) and NAME_RE.match(rec.name) else "unnamed"
         log = ctx.workdir / "conversations" / f"{index:03d}-{safe}.json"
         conv.save(log)
-        rec.conversation = str(log.relative_to(cfg.out))
+        rec.conversation = str(log.relative_to(ctx.cfg.out))
+    return rec
 
 
 __all__ = ["CandidateRecord", "Context", "run_candidate"]

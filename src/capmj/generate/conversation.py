@@ -38,11 +38,6 @@ class Conversation:
                            "cost_usd": c.cost_usd, "cached": c.cached, "attempts": c.attempts, "model": c.model})
         return c.text
 
-    def note(self, text: str) -> None:
-        """Record a user message the LLM will see with the next question (e.g. a given proposal)."""
-        self.messages.append({"role": "user", "content": text})
-        self.messages.append({"role": "assistant", "content": "Understood."})
-
     @property
     def usage(self) -> dict[str, Any]:
         return {

@@ -10,9 +10,10 @@ import argparse
 import json
 import sys
 
-from capmj.errors import CapmjError
+from capmj.errors import CapmjError, PluginError
 from capmj.taskcheck.checks import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS, CheckConfig, check_task
 from capmj.taskcheck.report import CheckResult, Report
+from capmj.tasks import registry
 
 EPILOG = """examples:
   python -m capmj.tasks check my-task                  # all checks, oracle on seeds 0-4
@@ -36,9 +37,6 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     ap = _parser()
     args = ap.parse_args(argv)
-    from capmj.tasks import registry
-    from capmj.errors import PluginError
-
     try:
         names = registry.resolve(args.names)
         cfg = CheckConfig.first(args.seeds, accept_rate=args.accept_rate)
