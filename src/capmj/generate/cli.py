@@ -1,4 +1,4 @@
-"""``python -m capmj.generate`` / ``capmj-generate``: write new tasks with an LLM, keep those physics accepts."""
+"""python -m capmj.generate (capmj-generate): write new tasks with an LLM, keep those physics accepts."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``python -m capmj.tasks check NAME... [--seeds K] [--accept-rate R] [--json]``.
+"""python -m capmj.tasks check NAME... [--seeds K] [--accept-rate R] [--json]
 
 Loads each named task through the registry (names, tags or ``all``), checks it and prints one
 report per task; exit code 0 when every task passes, 1 when one fails, 2 for bad input.
