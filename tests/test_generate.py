@@ -211,3 +211,17 @@ def test_cli_runs_a_generation_and_prints_verdicts(tmp_path, capsys):
     out = capsys.readouterr().out
     assert code == 0 and "broken-import-os" in out and "rejected at static" in out and "0 of 1 accepted" in out
     assert json.loads((tmp_path / "out" / "generation.jsonl").read_text())["stage"] == "static"
+
+
+def test_runaway_allocation_stopped_by_the_memory_limit(tmp_path):
+    from capmj.generate.isolate import run_isolated
+    from generator_script import CANDIDATES
+
+    code = (CANDIDATES / "good_zone_color.py").read_text().replace(
+        "        k = int(rng.integers(2, 4))", "        k = int(np.ones(600_000_000).sum()) % 2 + 2  # 4.8 GB")
+    path = tmp_path / "hog.py"
+    path.write_text(code)
+    run = run_isolated(path, name=GOOD, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
+                       limits=Limits(cpu_s=60, memory_mb=2048, wall_s=120))
+    scenes = {r.name: r for r in run.results}["scenes"]
+    assert scenes.outcome == "error" and "MemoryError" in scenes.detail, run
