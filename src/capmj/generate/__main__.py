@@ -1,0 +1,3 @@
+from capmj.generate.cli import main
+
+raise SystemExit(main())

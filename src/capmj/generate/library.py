@@ -1,0 +1,102 @@
+"""The generator's view of the installed task library, read from the registry at run time.
+
+Why dynamic: the best examples for a new task are whatever tasks are installed (the built-in
+A–J, the generated-task issue's ten, third-party plugins), so nothing here names a task.  Only
+the registry's public functions are used; a plugin that fails to load is left out, never fatal.
+The task API reference shown to the LLM is built from the live signatures and docstrings of
+``capmj.tasks`` and ``capmj.sim`` (one fact, one place: the prompt cannot drift from the code).
+"""
+
+from __future__ import annotations
+
+import inspect
+import sys
+from dataclasses import dataclass
+from types import ModuleType
+
+from capmj.errors import CapmjError
+from capmj.tasks import registry
+
+MAX_SOURCE_CHARS = 12_000
+"""An example's module source is cut beyond this (a prompt budget, not a correctness limit)."""
+
+
+@dataclass(frozen=True)
+class LibraryTask:
+    """One installed task: its name, a sample goal (seed 0), its docstring summary and source."""
+
+    name: str
+    goal: str
+    summary: str
+    source: str
+
+
+def load_library() -> tuple[LibraryTask, ...]:
+    """Every loadable installed task, sorted by name."""
+    from capmj.tasks.protocol import make_scene
+
+    out = []
+    for info in registry.list_tasks():
+        try:
+            task = registry.get_task(info.name)
+            goal = make_scene(task, 0).goal
+        except (CapmjError, Exception):  # noqa: BLE001 - a broken plugin is not an example
+            continue
+        doc = inspect.getdoc(task) or ""
+        summary = doc.strip().splitlines()[0] if doc.strip() else ""
+        module = sys.modules.get(type(task).__module__)
+        try:
+            source = inspect.getsource(module) if module is not None else ""
+        except (OSError, TypeError):
+            source = ""
+        out.append(LibraryTask(info.name, goal, summary, source[:MAX_SOURCE_CHARS]))
+    return tuple(out)
+
+
+def similar(name: str, goal: str, library: tuple[LibraryTask, ...], k: int = 3) -> list[str]:
+    """The ``k`` library names sharing most words with the proposal (a deterministic fallback
+    when the LLM's picks are unusable)."""
+    words = set(name.split("-")) | set(goal.lower().replace(".", " ").split())
+    scored = sorted(library, key=lambda t: (-len(words & (set(t.name.split("-")) | set(t.goal.lower().split()))), t.name))
+    return [t.name for t in scored[:k]]
+
+
+def _members(module: ModuleType, names: tuple[str, ...]) -> list[str]:
+    lines = [f"# {module.__name__}"]
+    for n in names:
+        obj = getattr(module, n)
+        doc = (inspect.getdoc(obj) or "").strip().split("\n\n")[0].replace("\n", " ")
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            try:
+                sig = str(inspect.signature(obj))
+            except (TypeError, ValueError):
+                sig = ""
+            lines.append(f"{n}{sig}: {doc}" if doc else f"{n}{sig}")
+        else:
+            lines.append(f"{n} = {obj!r}")
+    return lines
+
+
+def api_reference() -> str:
+    """Signatures and first docstring paragraphs of what a generated task may use."""
+    from capmj.sim import objects, state
+    from capmj.tasks import predicates, protocol, spawn
+
+    parts = [
+        _members(protocol, ("Scene", "Target", "OracleGoal", "Verdict", "Resample")),
+        _members(spawn, ("Spawner", "pick_colors", "pick_color", "DEFAULT_COLORS", "WARM_COLORS", "COOL_COLORS")),
+        ["Spawner methods: block(color, size='small', region=None, avoid=(), yaw=None), zone(color, scale=1.0, ...), "
+         "bowl(color, ...); .objects is the tuple of placed ObjectSpec (ids 1, 2, ... in creation order)."],
+        _members(predicates, tuple(n for n in predicates.__all__)),
+        _members(state, ("Pose", "SceneState")),
+        ["SceneState methods: spec(obj_id) -> ObjectSpec, pos(obj_id) -> np.ndarray, of_kind(kind), "
+         "poses[obj_id].yaw / .tilt; SceneState.from_specs(objects) is the spawn state."],
+        _members(objects, ("ObjectSpec", "BLOCK_SIZES", "ZONE_SIZE", "BOWL_HEIGHT", "BOWL_FLOOR", "BOWL_INNER_RADIUS",
+                           "KINDS", "FIXED_KINDS")),
+        ["ObjectSpec attributes: obj_id, kind, color, pos (centre), yaw, size (blocks), scale (zones), height, "
+         "footprint_radius, fixed."],
+    ]
+    return "\n".join(line for part in parts for line in part)
+
+
+__all__ = ["LibraryTask", "api_reference", "load_library", "similar"]
