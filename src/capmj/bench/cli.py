@@ -26,7 +26,7 @@ from capmj.errors import CapmjError, ConfigError
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
-LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature")
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
 LLM_CONCURRENCY = 4
 """Default episodes in flight per worker for the LLM agent: it mostly waits on HTTP."""
 EXECUTORS = ("local", "ray")
@@ -69,6 +69,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
     g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
+    g.add_argument("--on-unknown", dest="on_unknown", default=None, choices=("replan", "stop"),
+                   help="what an unknown reporter verdict does (default: replan)")
+    g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
+                   help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
     p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
