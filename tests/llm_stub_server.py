@@ -47,7 +47,8 @@ __all__ = [
 class Reply:
     """One scripted behaviour of the server for one request.
 
-    ``status`` != 200 answers an OpenAI-style error body with ``error_message``; ``delay_s`` waits
+    ``status`` != 200 answers an OpenAI-style error body with ``error_message``; ``headers`` are
+    extra response headers (e.g. ``{"Retry-After": "2"}`` on a 429); ``delay_s`` waits
     before answering (to trigger client timeouts); ``body`` replaces the whole 200 JSON answer
     (e.g. to send a completion without text content).
     """
@@ -57,6 +58,7 @@ class Reply:
     delay_s: float = 0.0
     error_message: str = "stub error"
     body: dict[str, Any] | None = None
+    headers: dict[str, str] | None = None
 
     @staticmethod
     def answer(text: str) -> Reply:
@@ -246,10 +248,13 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
         def log_message(self, format: str, *args: object) -> None:  # noqa: A002 - silence stderr
             return
 
-        def _send_json(self, status: int, payload: dict[str, Any]) -> None:
+        def _send_json(self, status: int, payload: dict[str, Any],
+                       headers: dict[str, str] | None = None) -> None:
             data = json.dumps(payload).encode()
             try:
                 self.send_response(status)
+                for key, value in (headers or {}).items():
+                    self.send_header(key, value)
                 self.send_header("Content-Type", "application/json")
                 self.send_header("Content-Length", str(len(data)))
                 self.end_headers()
@@ -257,9 +262,9 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
             except (BrokenPipeError, ConnectionResetError):  # client gave up (timeout)
                 pass
 
-        def _error(self, status: int, message: str) -> None:
+        def _error(self, status: int, message: str, headers: dict[str, str] | None = None) -> None:
             error = {"message": message, "type": "stub_error", "code": status}
-            self._send_json(status, {"error": error})
+            self._send_json(status, {"error": error}, headers)
 
         def do_GET(self) -> None:  # noqa: N802 - http.server API
             if self.path.rstrip("/").endswith("/models"):
@@ -287,7 +292,7 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
             if reply.delay_s > 0 and server._stopping.wait(reply.delay_s):
                 return  # server is shutting down
             if reply.status != 200:
-                self._error(reply.status, reply.error_message)
+                self._error(reply.status, reply.error_message, reply.headers)
             elif reply.body is not None:
                 self._send_json(200, reply.body)
             elif body.get("stream"):

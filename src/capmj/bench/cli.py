@@ -1,21 +1,25 @@
 """``python -m capmj.bench``: run task × seed grids for one agent configuration, and report.
 
 Exit codes: 0 the grid ran (whatever the success rate), 2 bad input (unknown task/tag/agent, bad
-seed range, unwritable output folder, ...) with a one-line error, 130 interrupted (Ctrl-C; finished
-episodes are kept and ``--resume`` continues).
+seed range, unwritable output folder, ...) with a one-line error, 128 + signal number when stopped
+(130 Ctrl-C, 143 SIGTERM, 129 SIGHUP; workers are stopped, finished episodes are kept and
+``--resume`` continues).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
+import signal
 import sys
+import threading
 import time
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from capmj.errors import CapmjError, ConfigError
 
@@ -26,6 +30,11 @@ LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_u
                "timeout_s", "cache_dir", "cache_only")
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
+LLM_CONCURRENCY = 4
+"""Default episodes in flight per worker for the LLM agent: it mostly waits on HTTP."""
+EXECUTORS = ("local", "ray")
+STOP_SIGNALS = ("SIGTERM", "SIGHUP")
+"""Signals that stop a run like Ctrl-C does: workers killed, finished episodes kept, resumable."""
 
 EPILOG = """\
 examples:
@@ -78,6 +87,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
+    sc = p.add_argument_group("scale (see docs/scale.md)")
+    sc.add_argument("--concurrency", type=int, default=None, metavar="K",
+                    help=f"episodes in flight per worker, so one simulates while others wait on the LLM "
+                         f"(default: {LLM_CONCURRENCY} for --agent llm, 1 otherwise)")
+    sc.add_argument("--max-llm-concurrency", dest="max_llm_concurrency", type=int, default=None, metavar="N",
+                    help="cap on LLM requests in flight across all workers (a provider's concurrency quota)")
+    sc.add_argument("--executor", default="local", choices=EXECUTORS,
+                    help="local: worker processes on this machine (default); ray: one Ray actor per worker "
+                         "on a Ray cluster (pip install 'capmj[ray]')")
+    sc.add_argument("--ray-address", dest="ray_address", default=None, metavar="ADDR",
+                    help="Ray cluster to join, e.g. 10.0.0.1:6379 (default: start a local Ray)")
     p.add_argument("--resume", action="store_true",
                    help="continue the run in --out: run only the episodes missing from its episodes.jsonl "
                         "(tasks/seeds/agent default to the stored config.json)")
@@ -268,6 +288,14 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     if workers < 0:
         raise ConfigError(f"--workers must be >= 0, got {workers}")
+    concurrency = args.concurrency if args.concurrency is not None else (
+        LLM_CONCURRENCY if agent_name == "llm" else 1)
+    if concurrency < 1:
+        raise ConfigError(f"--concurrency must be >= 1, got {concurrency}")
+    if args.max_llm_concurrency is not None and args.max_llm_concurrency < 1:
+        raise ConfigError(f"--max-llm-concurrency must be >= 1, got {args.max_llm_concurrency}")
+    if args.executor == "ray" and workers < 1:
+        raise ConfigError("--executor ray needs --workers >= 1 (Ray actors)")
     if args.attempts is not None and args.attempts < 1:
         raise ConfigError(f"--attempts must be >= 1, got {args.attempts}")
     log, images = not args.no_log, bool(args.log_images)
@@ -286,7 +314,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         "schema": "capmj.bench-config/1",
         "argv": list(argv),
         "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
-                 "workers": workers, "log": log, "log_images": images},
+                 "workers": workers, "concurrency": concurrency, "executor": args.executor,
+                 "max_llm_concurrency": args.max_llm_concurrency, "log": log, "log_images": images},
         "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
         "versions": _versions(),
         "started_at": (stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -308,7 +337,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     total = len(tasks) * len(seeds)
     print(f"capmj-bench: {len(tasks)} task(s) × {len(seeds)} seed(s) = {total} episode(s) with agent {agent_label}"
           + (f" ({model})" if model else "") + f"; {total - len(jobs)} already done, {len(jobs)} to run on "
-          f"{workers} worker(s); results in {out}" + (f" (skipped {bad} truncated line(s))" if bad else ""),
+          f"{workers} worker(s) × {concurrency} in flight; results in {out}" + (f" (skipped {bad} truncated line(s))" if bad else ""),
           file=sys.stderr)
 
     bar = None
@@ -327,15 +356,18 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
                                 refresh=False)
             bar.update(1)
 
-    interrupted = False
+    interrupted: int | None = None
     t0 = time.perf_counter()
-    with ResultsWriter(out / EPISODES) as writer:
+    with ResultsWriter(out / EPISODES) as writer, _stop_on_signals():
         try:
             stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
-                                     writer=writer, progress=progress, registered=registered)
-        except KeyboardInterrupt:
-            interrupted = True
+                                     writer=writer, progress=progress, registered=registered,
+                                     concurrency=concurrency, max_llm_concurrency=args.max_llm_concurrency,
+                                     executor=args.executor, ray_address=args.ray_address)
+        except KeyboardInterrupt as exc:
+            interrupted = getattr(exc, "signum", signal.SIGINT)
             stats = None
+            _stop_resource_tracker()
         finally:
             if bar is not None:
                 bar.close()
@@ -350,10 +382,57 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
               f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")
     print(f"ran {counts['n']} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
-    if interrupted:
-        print(f"capmj-bench: interrupted; continue with: python -m capmj.bench --out {out} --resume", file=sys.stderr)
-        return 130
+    if interrupted is not None:
+        print(f"capmj-bench: interrupted by {signal.Signals(interrupted).name}; continue with: "
+              f"python -m capmj.bench --out {out} --resume", file=sys.stderr)
+        return 128 + int(interrupted)
     return 0
+
+
+class Stopped(KeyboardInterrupt):
+    """A stop signal (SIGTERM/SIGHUP) delivered to the bench: handled exactly like Ctrl-C."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def _stop_on_signals() -> Iterator[None]:
+    """Turn SIGTERM and SIGHUP into :class:`Stopped` in the main thread while a grid runs.
+
+    Without this a ``kill``, a CI cancel or a closed terminal ends the parent at once and orphans
+    its spawn workers (and multiprocessing's resource tracker), which then hold stdout open forever;
+    with it the grid's cleanup kills the workers and the folder stays resumable.
+    """
+    def handler(signum: int, frame: Any) -> None:
+        raise Stopped(signum)
+
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in STOP_SIGNALS:
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                previous[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+def _stop_resource_tracker() -> None:
+    """End multiprocessing's resource-tracker process now rather than when this process exits.
+
+    The workers are dead by now; the tracker would otherwise outlive them while the summary is
+    written, and with it a stopped run's process tree (CI cancels and ``timeout`` wait for it).
+    """
+    try:
+        from multiprocessing import resource_tracker
+
+        resource_tracker._resource_tracker._stop()  # private, but stable since Python 3.8
+    except Exception:  # noqa: BLE001 - best effort; the tracker ends with us anyway
+        pass
 
 
 def report_main(argv: Sequence[str]) -> int:

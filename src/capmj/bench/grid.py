@@ -22,10 +22,12 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import queue
 import signal
+import threading
 import time
 from collections import deque
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, ThreadPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -79,35 +81,65 @@ def failed_record(task: str, seed: int, agent: str, model: str | None, error: st
 _WORKER: dict[str, Any] = {}
 
 
-def init_worker(spec: AgentSpec, registered: bytes | None = None) -> None:
-    """Pool initializer: build the agent once; add tasks registered by hand in the parent."""
+def init_worker(spec: AgentSpec, registered: bytes | None = None, llm_gate: Any = None) -> None:
+    """Pool initializer: build the first agent; add tasks registered by hand in the parent.
+
+    ``llm_gate`` is a process-shared semaphore bounding the LLM requests in flight across every
+    worker (``--max-llm-concurrency``); it is handed to :mod:`capmj.llm.client`.
+    """
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
     except ValueError:  # not the main thread (in-process mode from a thread)
         pass
     _WORKER.clear()
     _WORKER["spec"] = spec
+    _WORKER["idle"] = queue.SimpleQueue()
+    if llm_gate is not None:
+        from capmj.llm.client import set_request_gate
+
+        set_request_gate(llm_gate)
     try:
         if registered:
             from capmj.tasks import registry
 
             for task in pickle.loads(registered):
                 registry.register(task, replace=True)
-        from capmj.agents.factory import make_agent
-
-        _WORKER["agent"] = make_agent(spec.name, **dict(spec.options))
+        _WORKER["idle"].put(_build_agent(spec))
     except Exception as exc:  # noqa: BLE001 - reported per episode instead of breaking the pool
         _WORKER["init_error"] = f"{type(exc).__name__}: {exc}"
+
+
+def _build_agent(spec: AgentSpec) -> Any:
+    from capmj.agents.factory import make_agent
+
+    return make_agent(spec.name, **dict(spec.options))
+
+
+def _take_agent() -> Any:
+    """An agent no other episode is using: agents keep per-episode state (client, transcript), so
+    concurrent episodes in one worker each get their own instance, reused afterwards."""
+    idle: queue.SimpleQueue = _WORKER["idle"]
+    try:
+        return idle.get_nowait()
+    except queue.Empty:
+        return _build_agent(_WORKER["spec"])
 
 
 def run_job(job: Job) -> dict[str, Any]:
     """Run one episode in this worker; always returns a result record (never raises for the episode)."""
     spec: AgentSpec = _WORKER["spec"]
-    agent = _WORKER.get("agent")
-    model = getattr(agent, "model", None) if agent is not None else spec.options.get("model")
-    name = getattr(agent, "name", spec.name) if agent is not None else spec.name
-    if agent is None:
-        return failed_record(job.task, job.seed, name, model, _WORKER.get("init_error", "agent not built"))
+    if "init_error" in _WORKER:
+        return failed_record(job.task, job.seed, spec.name, spec.options.get("model"), _WORKER["init_error"])
+    agent = _take_agent()
+    try:
+        return _run_with(agent, job, spec)
+    finally:
+        _WORKER["idle"].put(agent)
+
+
+def _run_with(agent: Any, job: Job, spec: AgentSpec) -> dict[str, Any]:
+    model = getattr(agent, "model", None)
+    name = getattr(agent, "name", spec.name)
     try:
         from capmj.tasks.registry import get_task
 
@@ -123,6 +155,23 @@ def run_job(job: Job) -> dict[str, Any]:
     return sanitize(result.to_dict())
 
 
+def run_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
+    """Run a batch of episodes concurrently in this worker, one thread each (``--concurrency``).
+
+    While one episode waits on the LLM another simulates: MuJoCo releases the GIL while stepping and
+    an HTTP wait holds nothing.  Each episode has its own world, agent, RNG streams and budgets; the
+    sandbox traces per thread.  Records come back in the order of ``jobs``.
+    """
+    if len(jobs) == 1:
+        return [run_job(jobs[0])]
+    threads = _WORKER.get("threads")
+    if threads is None or threads._max_workers < len(jobs):
+        if threads is not None:
+            threads.shutdown(wait=False)
+        threads = _WORKER["threads"] = ThreadPoolExecutor(max_workers=len(jobs), thread_name_prefix="episode")
+    return list(threads.map(run_job, jobs))
+
+
 # ---------------------------------------------------------------------- parent side
 @dataclass
 class GridStats:
@@ -135,24 +184,38 @@ class GridStats:
 
 
 class Grid:
-    """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process)."""
+    """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process).
+
+    ``concurrency`` episodes run at once inside each worker process (see :func:`run_batch`): the
+    parent submits batches of up to that many jobs.  A batch whose worker dies has every episode
+    re-run alone, so crash accounting is per episode whatever the concurrency.
+    """
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
-                 registered: Sequence[Any] = (), recycle_after: int | None = None) -> None:
+                 registered: Sequence[Any] = (), recycle_after: int | None = None, concurrency: int = 1,
+                 max_llm_concurrency: int | None = None) -> None:
         self.agent = agent
         self.workers = max(0, int(workers))
-        self.recycle_after = recycle_after
+        self.concurrency = max(1, int(concurrency))
+        # max_tasks_per_child counts calls, and a call is a batch
+        self.recycle_after = None if recycle_after is None else max(1, recycle_after // self.concurrency)
         self.on_result = on_result
         self.registered = pickle.dumps(list(registered)) if registered else None
+        self.max_llm_concurrency = max_llm_concurrency
         self.stats = GridStats()
         self._pool: ProcessPoolExecutor | None = None
+        self._gate: Any = None
         self._workers: dict[int, Any] = {}  # per instance: a class-level dict would leak across grids
+        self._isolating = False
 
     # .................................................................. pool management
     def _new_pool(self) -> ProcessPoolExecutor:
         ctx = multiprocessing.get_context(MP_CONTEXT)
+        if self.max_llm_concurrency and self._gate is None:
+            self._gate = ctx.BoundedSemaphore(self.max_llm_concurrency)
         return ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=init_worker,
-                                   initargs=(self.agent, self.registered), max_tasks_per_child=self.recycle_after)
+                                   initargs=(self.agent, self.registered, self._gate),
+                                   max_tasks_per_child=self.recycle_after)
 
     def _track_workers(self) -> None:
         """Remember the pool's worker processes: a broken pool may forget them before we ask."""
@@ -191,15 +254,16 @@ class Grid:
         self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
         self.on_result(job, rec)
 
+    def _failed(self, job: Job, error: str) -> dict[str, Any]:
+        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
+
     # .................................................................. running
     def run(self, jobs: Iterable[Job]) -> GridStats:
         jobs = list(jobs)
         if not jobs:
             return self.stats
         if self.workers == 0:
-            init_worker(self.agent, self.registered)
-            for job in jobs:
-                self._emit(job, run_job(job))
+            self._run_here(jobs)
             return self.stats
         try:
             self._run_pool(deque(jobs))
@@ -207,9 +271,28 @@ class Grid:
             self._kill_pool()
         return self.stats
 
+    def _run_here(self, jobs: list[Job]) -> None:
+        """``workers=0``: run in this process (debugging, tests); the LLM gate is restored after."""
+        from capmj.llm import client
+
+        gate = threading.BoundedSemaphore(self.max_llm_concurrency) if self.max_llm_concurrency else None
+        previous, sigint = client.request_gate(), signal.getsignal(signal.SIGINT)
+        init_worker(self.agent, self.registered, gate)  # (it ignores SIGINT, meant for pool workers)
+        signal.signal(signal.SIGINT, sigint)
+        try:
+            for i in range(0, len(jobs), self.concurrency):
+                batch = jobs[i:i + self.concurrency]
+                for job, rec in zip(batch, run_batch(batch)):
+                    self._emit(job, rec)
+        finally:
+            client.set_request_gate(previous)
+            threads = _WORKER.pop("threads", None)
+            if threads is not None:
+                threads.shutdown(wait=True)
+
     def _run_pool(self, pending: deque[Job]) -> None:
         suspects: deque[Job] = deque()   # were in flight when a worker died: re-run one at a time
-        inflight: dict[Future, Job] = {}
+        inflight: dict[Future, list[Job]] = {}
         limit = self.workers + 2
         while pending or suspects or inflight:
             if self._pool is None:
@@ -218,49 +301,49 @@ class Grid:
             if not inflight:
                 self._isolating = bool(suspects)
             source = suspects if self._isolating else pending
-            cap = 1 if self._isolating else limit
+            cap, size = (1, 1) if self._isolating else (limit, self.concurrency)
             while source and len(inflight) < cap:
-                job = source.popleft()
+                batch = [source.popleft() for _ in range(min(size, len(source)))]
                 try:
-                    inflight[self._pool.submit(run_job, job)] = job
+                    inflight[self._pool.submit(run_batch, batch)] = batch
                     self._track_workers()
                 except BrokenProcessPool:
-                    source.appendleft(job)
+                    source.extendleft(reversed(batch))
                     broken = True
                     break
             if inflight and not broken:
                 done, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
                 for fut in done:
-                    job = inflight[fut]
+                    batch = inflight[fut]
                     try:
-                        rec = fut.result()
+                        recs = fut.result()
                     except BrokenProcessPool:
                         broken = True
                         continue
                     except Exception as exc:  # noqa: BLE001 - e.g. a result that failed to unpickle
-                        rec = failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"),
-                                            f"WorkerError: {type(exc).__name__}: {exc}")
+                        recs = [self._failed(j, f"WorkerError: {type(exc).__name__}: {exc}") for j in batch]
                     del inflight[fut]
-                    self._emit(job, rec)
+                    for job, rec in zip(batch, recs):
+                        self._emit(job, rec)
             if broken:
-                crashed = list(inflight.values())
+                crashed = [j for batch in inflight.values() for j in batch]
                 inflight.clear()
                 codes = self._exit_codes()
                 self._kill_pool()
                 if self._isolating and len(crashed) == 1:
                     job = crashed[0]
                     self.stats.crashes += 1
-                    how = _describe_codes(codes)
-                    self._emit(job, failed_record(
-                        job.task, job.seed, self.agent.name, self.agent.options.get("model"),
-                        f"WorkerCrash: the worker process died while running this episode{how}; "
-                        "it was re-run alone and died again", rrd=None))
+                    self._emit(job, self._failed(job, crash_error(_describe_codes(codes))) | {"rrd": None})
                 else:
                     self.stats.retried += len(crashed)
                     suspects.extend(crashed)
                 self._isolating = bool(suspects)
 
-    _isolating = False
+
+def crash_error(how: str = "") -> str:
+    """The error of an episode whose worker died twice, the second time running it alone."""
+    return (f"WorkerCrash: the worker process died while running this episode{how}; "
+            "it was re-run alone and died again")
 
 
 def _describe_codes(codes: Sequence[int]) -> str:
@@ -280,7 +363,9 @@ def _describe_codes(codes: Sequence[int]) -> str:
 
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
                      writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
-                     registered: Sequence[Any] = ()) -> GridStats:
+                     registered: Sequence[Any] = (), concurrency: int = 1,
+                     max_llm_concurrency: int | None = None, executor: str = "local",
+                     ray_address: str | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``).
 
     When episodes are logged, workers are replaced every :data:`RECYCLE_LOGGING_WORKERS` episodes:
@@ -301,13 +386,21 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
             progress(rec)
 
     logging = any(j.rrd for j in jobs)
-    grid = Grid(agent, workers=workers, on_result=on_result, registered=registered,
-                recycle_after=RECYCLE_LOGGING_WORKERS if logging else None)
+    if executor == "ray":
+        from capmj.bench.ray_executor import RayGrid
+
+        grid: Grid | RayGrid = RayGrid(agent, workers=workers, on_result=on_result, registered=registered,
+                                       concurrency=concurrency, max_llm_concurrency=max_llm_concurrency,
+                                       address=ray_address)
+    else:
+        grid = Grid(agent, workers=workers, on_result=on_result, registered=registered,
+                    recycle_after=RECYCLE_LOGGING_WORKERS if logging else None, concurrency=concurrency,
+                    max_llm_concurrency=max_llm_concurrency)
     t0 = time.perf_counter()
     stats = grid.run(jobs)
     stats.wall_s = time.perf_counter() - t0
     return stats
 
 
-__all__ = ["AgentSpec", "Grid", "GridStats", "Job", "MP_CONTEXT", "episode_key", "failed_record", "init_worker",
-           "rrd_relpath", "run_job", "run_jobs_to_file"]
+__all__ = ["AgentSpec", "Grid", "GridStats", "Job", "MP_CONTEXT", "crash_error", "episode_key", "failed_record",
+           "init_worker", "rrd_relpath", "run_batch", "run_job", "run_jobs_to_file"]

@@ -25,7 +25,7 @@ from capmj.errors import ConfigError, LLMError
 from capmj.llm.cache import CompletionCache, cache_key
 
 __all__ = ["CallRecord", "Completion", "DEFAULT_TIMEOUT_S", "LLMClient", "LLMConfig", "Usage", "image_part",
-           "text_part"]
+           "set_request_gate", "text_part"]
 
 DEFAULT_TIMEOUT_S = 300.0
 """Per-request timeout.  Generous on purpose: a 1.5B model on 2 CPU cores needs 40-90 s for a cold
@@ -154,6 +154,45 @@ def _import_litellm() -> ModuleType:
 
     litellm.suppress_debug_info = True  # no "Give Feedback / Get Help" banners on errors
     return litellm
+
+
+MAX_RETRY_AFTER_S = 120.0
+"""Longest ``Retry-After`` a provider may ask for before we give up waiting and fail the call."""
+
+_request_gate: Any = None
+
+
+def set_request_gate(gate: Any) -> None:
+    """Bound the requests in flight from this process: ``gate`` is a semaphore (``acquire`` /
+    ``release``), a ``multiprocessing`` one to bound them across worker processes too
+    (``capmj.bench --max-llm-concurrency``), or ``None`` for no bound.  Process-wide on purpose:
+    the bound is a property of the provider quota, not of one client."""
+    global _request_gate
+    _request_gate = gate
+
+
+def request_gate() -> Any:
+    """The gate :func:`set_request_gate` installed, or ``None``."""
+    return _request_gate
+
+
+def _retry_after(exc: BaseException) -> float | None:
+    """Seconds a 429/503 answer asked us to wait (``Retry-After`` header, seconds form), if any."""
+    for headers in (getattr(exc, "litellm_response_headers", None),
+                    getattr(getattr(exc, "response", None), "headers", None)):
+        try:
+            value = headers.get("retry-after") if headers is not None else None
+        except Exception:  # noqa: BLE001 - headers of unknown shape
+            value = None
+        if value is None:
+            continue
+        try:
+            seconds = float(value)
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(seconds) and seconds >= 0:
+            return seconds
+    return None
 
 
 def _is_retryable(exc: BaseException) -> bool:
@@ -289,11 +328,22 @@ class LLMClient:
             kwargs["mock_response"] = mock
         total = cfg.max_retries + 1
         for attempt in range(1, total + 1):
+            gate = _request_gate
             try:
-                response = litellm.completion(**kwargs)
+                if gate is not None:
+                    gate.acquire()
+                try:
+                    response = litellm.completion(**kwargs)
+                finally:
+                    if gate is not None:
+                        gate.release()
             except Exception as exc:  # every provider failure becomes LLMError below
-                if attempt < total and _is_retryable(exc):
-                    self._sleep(cfg.backoff_s * 2 ** (attempt - 1))
+                wait_s = cfg.backoff_s * 2 ** (attempt - 1)
+                asked = _retry_after(exc)
+                if asked is not None:
+                    wait_s = max(wait_s, asked)
+                if attempt < total and _is_retryable(exc) and wait_s <= MAX_RETRY_AFTER_S:
+                    self._sleep(wait_s)
                     continue
                 plural = "s" if attempt != 1 else ""
                 error = LLMError(f"{cfg.model}: {type(exc).__name__}: {_short(exc)} "
