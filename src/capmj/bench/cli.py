@@ -22,7 +22,8 @@ from capmj.errors import CapmjError, ConfigError
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
-LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "timeout_s", "cache_dir", "cache_only")
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
+               "timeout_s", "cache_dir", "cache_only")
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
 
@@ -62,6 +63,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
     g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
+    g.add_argument("--on-unknown", dest="on_unknown", default=None, choices=("replan", "stop"),
+                   help="what an unknown reporter verdict does (default: replan)")
+    g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
+                   help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
     g.add_argument("--llm-timeout", dest="timeout_s", type=float, default=None, metavar="S",
                    help="seconds per LLM request before it is retried (default 300: slow local servers)")
     g.add_argument("--llm-cache", dest="cache_dir", default=None, metavar="DIR",
