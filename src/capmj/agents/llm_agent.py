@@ -29,7 +29,9 @@ from pathlib import Path
 from typing import Any
 
 from capmj.agents.api import PlannerAPI
+from capmj.agents.attribution import attempt_facts
 from capmj.agents.base import EpisodeContext
+from capmj.agents.llm_meter import LLMMeter, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
@@ -60,7 +62,9 @@ class LLMAgent:
                  cache_dir: str | Path | None = None, max_tokens: int = 2048, *,
                  api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
-                 max_fn_depth: int = 3, prompts_dir: str | Path | None = None) -> None:
+                 max_fn_depth: int = 3, prompts_dir: str | Path | None = None,
+                 episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
+                 price: str | None = None, cache_only: bool = False) -> None:
         if reporter not in REPORTERS:
             raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
         try:
@@ -75,7 +79,11 @@ class LLMAgent:
             cache_dir = os.environ[CACHE_ENV].strip()
         self.config = LLMConfig(model=model, api_base=api_base, api_key=api_key, temperature=float(temperature),
                                 max_tokens=int(max_tokens), timeout_s=float(timeout_s), max_retries=int(max_retries),
-                                backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None)
+                                backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None,
+                                cache_only=bool(cache_only))
+        self.price = parse_price(price)
+        self.limits = {"max_tokens": episode_max_tokens, "max_cost_usd": episode_max_cost_usd}
+        LLMMeter(self._no_call, model, price=self.price, **self.limits)  # validates the limits now
         self.reporter = reporter
         self.attempts = attempts
         self.plan_budget = plan_budget or DEFAULT_PLAN_BUDGET
@@ -84,6 +92,10 @@ class LLMAgent:
         self.prompts_dir = Path(prompts_dir) if prompts_dir is not None else None
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
+
+    @staticmethod
+    def _no_call(*args: Any, **kwargs: Any) -> Any:
+        raise AssertionError("validation only")
 
     @property
     def model(self) -> str:
@@ -95,6 +107,8 @@ class LLMAgent:
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
+        meter = self.meter = LLMMeter(client.complete, self.model, price=self.price, **self.limits)
+        ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
         attempts: list[dict[str, Any]] = []
@@ -113,11 +127,16 @@ class LLMAgent:
             for k in range(1, self.attempts + 1):
                 if k > 1:
                     ctx.reset()
+                meter.attempt = k
                 record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter, feedback)
                 attempts.append(record)
                 self._usage(client, notes)
                 self._record_attempt(ctx, record)
                 last_error = error
+                if meter.exceeded is not None:
+                    notes["stopped"] = "llm budget"
+                    last_error = error or meter.exceeded
+                    break
                 if isinstance(error, LLMError):
                     notes["stopped"] = "llm error"
                     break
@@ -134,6 +153,7 @@ class LLMAgent:
             if reporter is not None:
                 reporter.close()
             self._usage(client, notes)
+            notes["spend"] = meter.summary()
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
@@ -142,7 +162,7 @@ class LLMAgent:
                  reporter: Any, feedback: Feedback | None
                  ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
         api = PlannerAPI(ctx)
-        session = LMPSession(complete=client.complete, api=api.functions(), objects_text=api.objects_text,
+        session = LMPSession(complete=self.meter.complete, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
         calls_before = len(client.records)
@@ -175,11 +195,17 @@ class LLMAgent:
             record["error"] = f"{type(error).__name__}: {error}"
             record["error_kind"] = "llm" if isinstance(error, LLMError) else "plan"
             record["report"] = self._error_report(error, ctx)
+            record.update(attempt_facts(transcript, k, record["error"], api.call_log))
         if report is not None:
             record["verdict"] = report.verdict
             record["report"] = report.text() + "\n" + self._scene_summary(ctx)
             if report.error:
                 record["reporter_error"] = report.error
+            if "predicate" not in record:  # the task's judgement of the state the reporter judged
+                try:
+                    record["predicate"] = bool(ctx.task.evaluate(ctx.scene, ctx.world.state()).success)
+                except Exception:  # noqa: BLE001 - a fact for attribution only
+                    pass
         ctx.recorder.text(f"llm/attempt{k}/api_calls", api.log_text())
         return record, error, report, outcome
 

@@ -10,10 +10,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import sys
 import time
-from importlib import metadata
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -22,7 +20,10 @@ from capmj.errors import CapmjError, ConfigError
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
-LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature")
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "episode_max_tokens",
+               "episode_max_cost_usd", "price")
+EXIT_BUDGET = 3
+"""Exit code of a run stopped by --max-cost-usd / --max-tokens (resumable with a higher limit)."""
 
 EPILOG = """\
 examples:
@@ -32,7 +33,9 @@ examples:
   python -m capmj.bench --out runs/smoke --resume         # run what a killed run did not finish
   python -m capmj.bench --agent llm --model gpt-4o-mini --reporter vlm --log-images   (see docs/llm.md)
   python -m capmj.bench --list                            # tasks, their plugins, tags, broken plugins
-  python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table
+  python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table, paired McNemar test
+  python -m capmj.bench replay-check runs/llm             # re-run from the LLM cache alone, compare
+  python -m capmj.bench export runs/llm --format chat-jsonl --out calls.jsonl   (see docs/export.md)
 
 results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
          DIR/rrd/<task>/<seed>-<agent>.rrd (open with: python -m capmj.replay FILE --open)
@@ -60,6 +63,18 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
     g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
+    g.add_argument("--episode-max-tokens", dest="episode_max_tokens", type=int, default=None, metavar="N",
+                   help="LLM tokens per episode; an episode over it ends with failure 'budget'")
+    g.add_argument("--episode-max-cost-usd", dest="episode_max_cost_usd", type=float, default=None, metavar="USD",
+                   help="LLM cost per episode (needs a known or declared price)")
+    g.add_argument("--price", default=None, metavar="IN,OUT",
+                   help="declare the model's price in USD per million input,output tokens (local/unlisted models)")
+    b = p.add_argument_group("run budget (the whole result folder, resumed runs included; see docs/failures.md)")
+    b.add_argument("--max-cost-usd", dest="max_cost_usd", type=float, default=None, metavar="USD",
+                   help=f"stop starting episodes once the run's LLM cost reaches USD (exit {EXIT_BUDGET}; "
+                        "--resume with a higher limit continues)")
+    b.add_argument("--max-tokens", dest="max_tokens", type=int, default=None, metavar="N",
+                   help="stop starting episodes once the run's LLM tokens reach N")
     p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
@@ -131,16 +146,6 @@ def _one_line(msg: str) -> str:
     return " ".join(str(msg).split())
 
 
-def _versions() -> dict[str, str]:
-    out = {"python": platform.python_version(), "platform": platform.platform()}
-    for dist in ("capmj", "mujoco", "rerun-sdk", "numpy", "dm-control"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = "not installed"
-    return out
-
-
 def _prepare_out(path: Path) -> Path:
     """Create the result folder and prove it is writable; ``ConfigError`` otherwise."""
     try:
@@ -208,7 +213,9 @@ def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.agents.factory import make_agent
     from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
+    from capmj.bench.manifest import build_manifest
     from capmj.bench.report import pct_cell, write_summary
+    from capmj.bench.spend import RunBudget
     from capmj.bench.results import (
         CONFIG,
         EPISODES,
@@ -245,6 +252,9 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     if args.attempts is not None and args.attempts < 1:
         raise ConfigError(f"--attempts must be >= 1, got {args.attempts}")
     log, images = not args.no_log, bool(args.log_images)
+    stored_budget = prev_args.get("run_budget") or {}
+    run_budget = RunBudget(args.max_cost_usd if args.max_cost_usd is not None else stored_budget.get("max_cost_usd"),
+                           args.max_tokens if args.max_tokens is not None else stored_budget.get("max_tokens"))
     if args.resume and not (args.no_log or args.log_images) and prev_args:
         log, images = bool(prev_args.get("log", True)), bool(prev_args.get("log_images", False))
 
@@ -253,15 +263,26 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     tasks, registered = _resolve_tasks(tasks_sel)
     agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
     agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
+    if run_budget.max_cost_usd is not None:
+        from capmj.agents.llm_meter import price_source
+
+        if model is None or price_source(model, getattr(agent, "price", None)) == "unknown":
+            raise ConfigError(f"--max-cost-usd needs a price, but the price of {model!r} is unknown; "
+                              "declare one with --price IN,OUT (USD per million tokens) or use --max-tokens")
+    from capmj.tasks import registry as _registry
+
+    manifest = build_manifest(agent, [_registry.get_task(t) for t in tasks])
     _prepare_out(out)
 
     config = {
         "schema": "capmj.bench-config/1",
         "argv": list(argv),
         "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
-                 "workers": workers, "log": log, "log_images": images},
+                 "workers": workers, "log": log, "log_images": images,
+                 "run_budget": {"max_cost_usd": run_budget.max_cost_usd, "max_tokens": run_budget.max_tokens}},
         "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
-        "versions": _versions(),
+        "versions": manifest["packages"],
+        "manifest": manifest,
         "started_at": (stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "resumed_at": list((stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
                                                                       if args.resume else []),
@@ -271,6 +292,15 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     # ---- the episodes still to run
     existing, bad = read_results(out / EPISODES)
     done = {episode_key(r) for r in existing}
+    spent: list[dict[str, Any]] = list(existing)
+    stopped: list[str] = []
+
+    def over_budget() -> bool:
+        if run_budget.active and not stopped:
+            why = run_budget.exceeded(spent)
+            if why:
+                stopped.append(why)
+        return bool(stopped)
     jobs = []
     for t in tasks:
         for s in seeds:
@@ -293,6 +323,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     counts = {"n": 0, "ok": 0}
 
     def progress(rec: dict[str, Any]) -> None:
+        spent.append(rec)
         counts["n"] += 1
         counts["ok"] += bool(rec.get("success"))
         if bar is not None:
@@ -305,7 +336,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     with ResultsWriter(out / EPISODES) as writer:
         try:
             stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
-                                     writer=writer, progress=progress, registered=registered)
+                                     writer=writer, progress=progress, registered=registered, stop=over_budget)
         except KeyboardInterrupt:
             interrupted = True
             stats = None
@@ -317,7 +348,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     records, _ = read_results(out / EPISODES)
     summary = summarize(records)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": counts["n"], "workers": workers,
-                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0)}
+                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
+                      "stopped_by_budget": stopped[0] if stopped else None}
     write_summary(out, summary, title=f"capmj benchmark results ({out.name})")
     for label, st in summary["overall"].items():
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
@@ -326,6 +358,11 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     if interrupted:
         print(f"capmj-bench: interrupted; continue with: python -m capmj.bench --out {out} --resume", file=sys.stderr)
         return 130
+    if stopped and len(records) < total:
+        print(f"capmj-bench: run budget reached: {stopped[0]}; {total - len(records)} episode(s) not started. "
+              f"Continue with: python -m capmj.bench --out {out} --resume --max-cost-usd/--max-tokens <higher limit>",
+              file=sys.stderr)
+        return EXIT_BUDGET
     return 0
 
 
@@ -342,6 +379,8 @@ def report_main(argv: Sequence[str]) -> int:
         print(f"capmj-bench report: error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
     print(json.dumps(summary, indent=2, sort_keys=True) if args.json else md, end="" if not args.json else "\n")
+    for warning in summary.get("warnings") or []:
+        print(f"capmj-bench report: warning: {warning}", file=sys.stderr)
     if out is not None:
         print(f"wrote {Path(out) / 'summary.md'}, summary.json, summary.png", file=sys.stderr)
     return 0
@@ -351,6 +390,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "report":
         return report_main(argv[1:])
+    if argv and argv[0] == "replay-check":
+        from capmj.bench.replay_check import main as replay_check_main
+
+        return replay_check_main(argv[1:])
+    if argv and argv[0] == "export":
+        from capmj.bench.export import main as export_main
+
+        return export_main(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         if args.list:

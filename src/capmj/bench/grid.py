@@ -138,8 +138,10 @@ class Grid:
     """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process)."""
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
-                 registered: Sequence[Any] = (), recycle_after: int | None = None) -> None:
+                 registered: Sequence[Any] = (), recycle_after: int | None = None,
+                 stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
+        self.stop = stop or (lambda: False)  # checked before each new episode (run budget)
         self.workers = max(0, int(workers))
         self.recycle_after = recycle_after
         self.on_result = on_result
@@ -199,6 +201,8 @@ class Grid:
         if self.workers == 0:
             init_worker(self.agent, self.registered)
             for job in jobs:
+                if self.stop():
+                    break
                 self._emit(job, run_job(job))
             return self.stats
         try:
@@ -212,6 +216,8 @@ class Grid:
         inflight: dict[Future, Job] = {}
         limit = self.workers + 2
         while pending or suspects or inflight:
+            if self.stop() and not inflight:
+                break
             if self._pool is None:
                 self._pool = self._new_pool()
             broken = False
@@ -219,7 +225,7 @@ class Grid:
                 self._isolating = bool(suspects)
             source = suspects if self._isolating else pending
             cap = 1 if self._isolating else limit
-            while source and len(inflight) < cap:
+            while source and len(inflight) < cap and not self.stop():
                 job = source.popleft()
                 try:
                     inflight[self._pool.submit(run_job, job)] = job
@@ -280,16 +286,21 @@ def _describe_codes(codes: Sequence[int]) -> str:
 
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
                      writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
-                     registered: Sequence[Any] = ()) -> GridStats:
+                     registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``).
 
     When episodes are logged, workers are replaced every :data:`RECYCLE_LOGGING_WORKERS` episodes:
     rerun never frees a Python ``RecordingStream`` (its threads outlive it, rerun issue #2116), so
     a worker writing one ``.rrd`` per episode would otherwise gain four idle threads per episode.
     """
+    from capmj.bench.failures import classify
+    from capmj.bench.transcripts import write_calls
+
     out_dir = Path(out_dir).resolve()
 
     def on_result(job: Job, rec: dict[str, Any]) -> None:
+        write_calls(out_dir, rec)
+        rec["failure"] = classify(rec)
         rrd = rec.get("rrd")
         if rrd:
             try:
@@ -302,7 +313,7 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
 
     logging = any(j.rrd for j in jobs)
     grid = Grid(agent, workers=workers, on_result=on_result, registered=registered,
-                recycle_after=RECYCLE_LOGGING_WORKERS if logging else None)
+                recycle_after=RECYCLE_LOGGING_WORKERS if logging else None, stop=stop)
     t0 = time.perf_counter()
     stats = grid.run(jobs)
     stats.wall_s = time.perf_counter() - t0

@@ -143,7 +143,12 @@ def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         return sum(vals) / len(vals) if vals else None
 
     wall = [float(r["wall_s"]) for r in records if isinstance(r.get("wall_s"), (int, float))]
+    from capmj.bench.failures import breakdown
+    from capmj.bench.spend import usage
+
     return {
+        "failures": breakdown(records),
+        "llm_usage": usage(records),
         "n": n,
         "successes": k,
         "success_rate": k / n if n else None,
