@@ -176,7 +176,7 @@ def run_a(stub: StubLLMServer, tmp_path_factory: pytest.TempPathFactory) -> Path
         # 1000 USD per million tokens: the first episode alone passes the 0.001 USD cap
         assert bench(stub, out, "--seeds", SEEDS, "--price", "1000,1000", "--max-cost-usd", "0.001") == 3
         assert len((out / "episodes.jsonl").read_text().splitlines()) == 1
-        assert bench(stub, out, "--resume", "--max-cost-usd", "100") == 0
+        assert bench(stub, out, "--resume", "--price", "1000,1000", "--max-cost-usd", "100") == 0
     finally:
         mp.undo()
     return out

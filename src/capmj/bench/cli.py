@@ -272,6 +272,11 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.tasks import registry as _registry
 
     manifest = build_manifest(agent, [_registry.get_task(t) for t in tasks])
+    if stored and stored.get("manifest"):
+        from capmj.bench.manifest import differences
+
+        for warning in differences({"stored run": stored["manifest"], "this resume": manifest}):
+            print(f"capmj-bench: warning: resuming under different conditions: {warning}", file=sys.stderr)
     _prepare_out(out)
 
     config = {

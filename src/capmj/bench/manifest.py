@@ -26,7 +26,7 @@ __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "packa
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
 MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "budgets", "hash_seed")
-"""Entries compared between runs (python/platform are reported but differ harmlessly)."""
+"""Entries compared between runs (everything but timestamps, price and cache location)."""
 
 
 def sha256_file(path: str | Path) -> str:
