@@ -10,12 +10,18 @@ object is at the end, and the final object poses (for exact replays).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from typing import Any
 
 __all__ = ["PLANNER_PROGRAM", "attempt_facts", "final_poses", "placement_drift"]
 
 PLANNER_PROGRAM = "planner"
+
+_NAMED_HELPER = re.compile(r"\bin the code (\w+) wrote\b|\b(parse_function) could not write\b"
+                           r"|\bwritten by (parse_function)\b")
+"""Errors that name the failed helper program themselves ("in the code parse_obj_name wrote for
+this line, line 1: ...")."""
 
 
 def _core(error: str) -> str:
@@ -27,12 +33,16 @@ def _core(error: str) -> str:
 def failed_program(calls: Iterable[Any], attempt: int, error: str | None) -> str | None:
     """Which program of ``attempt`` failed: ``"planner"`` or the name of a helper LMP.
 
-    A helper's failure reaches the plan as an exception of the API function the plan called, so
-    the plan's error text contains the helper's; the helper whose recorded error is contained in
-    the attempt's error is the failed program.  Without such a helper, the plan failed.
+    An error that names the program ("in the code parse_obj_name wrote ...") decides.  Else: a
+    helper's failure reaches the plan as an exception of the API function the plan called, so the
+    plan's error text contains the helper's; the helper whose recorded error is contained in the
+    attempt's error is the failed program.  Without such a helper, the plan failed.
     """
     if not error:
         return None
+    named = _NAMED_HELPER.search(error)
+    if named:
+        return next(g for g in named.groups() if g)
     for call in reversed(list(calls)):
         get = call.get if isinstance(call, Mapping) else lambda k, c=call: getattr(c, k, None)
         if get("attempt") != attempt or get("lmp") == PLANNER_PROGRAM or not get("error"):

@@ -64,7 +64,8 @@ class LLMConfig:
     backoff_s: float = 1.0
     cache_dir: Path | None = None
     mock_response: str | None = None
-    cache_only: bool = False  # replays: a cache miss is an LLMError, never a live call
+    cache_only: bool = False
+    """Answer only from ``cache_dir``: a missing entry is an LLMError, never a live call."""
 
     def __post_init__(self) -> None:
         if not self.model:
@@ -73,10 +74,10 @@ class LLMConfig:
             raise ConfigError(f"LLMConfig.timeout_s must be positive, got {self.timeout_s}")
         if self.max_retries < 0 or self.backoff_s < 0 or self.max_tokens <= 0:
             raise ConfigError("LLMConfig: max_retries and backoff_s must be >= 0, max_tokens > 0")
-        if self.cache_only and self.cache_dir is None:
-            raise ConfigError("LLMConfig.cache_only needs a cache_dir")
         if self.cache_dir is not None and not isinstance(self.cache_dir, Path):
             object.__setattr__(self, "cache_dir", Path(self.cache_dir))
+        if self.cache_only and self.cache_dir is None:
+            raise ConfigError("LLMConfig.cache_only needs cache_dir (the folder to replay from)")
 
     @property
     def resolved_api_key(self) -> str | None:
@@ -251,8 +252,9 @@ class LLMClient:
                 self._record(hit, purpose=purpose, latency=hit.latency_s, attempts=0)
                 return hit
             if cfg.cache_only:
-                error = LLMError(f"{cfg.model}: cache-only: no cached completion for {purpose or 'a call'} "
-                                 f"(key {key[:16]}) in {cfg.cache_dir}")
+                error = LLMError(f"cache-only: no cached completion for {purpose or 'this request'} "
+                                 f"(key {key[:12]}... under {cfg.cache_dir}); no live call was made. "
+                                 "Rerun without cache-only to ask the model.")
                 self._record(None, purpose=purpose, latency=0.0, attempts=0, error=str(error))
                 raise error
         _import_litellm()  # seconds on first use; not part of the call's latency
