@@ -213,9 +213,9 @@ def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.agents.factory import make_agent
     from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
-    from capmj.bench.manifest import build_manifest
+    from capmj.bench.manifest import run_manifest
     from capmj.bench.report import pct_cell, write_summary
-    from capmj.bench.spend import RunBudget
+    from capmj.bench.spend import BudgetTracker, RunBudget
     from capmj.bench.results import (
         CONFIG,
         EPISODES,
@@ -252,9 +252,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     if args.attempts is not None and args.attempts < 1:
         raise ConfigError(f"--attempts must be >= 1, got {args.attempts}")
     log, images = not args.no_log, bool(args.log_images)
-    stored_budget = prev_args.get("run_budget") or {}
-    run_budget = RunBudget(args.max_cost_usd if args.max_cost_usd is not None else stored_budget.get("max_cost_usd"),
-                           args.max_tokens if args.max_tokens is not None else stored_budget.get("max_tokens"))
+    run_budget = RunBudget.resolve(args.max_cost_usd, args.max_tokens, prev_args.get("run_budget"))
     if args.resume and not (args.no_log or args.log_images) and prev_args:
         log, images = bool(prev_args.get("log", True)), bool(prev_args.get("log_images", False))
 
@@ -263,20 +261,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     tasks, registered = _resolve_tasks(tasks_sel)
     agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
     agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
-    if run_budget.max_cost_usd is not None:
-        from capmj.agents.llm_meter import price_source
-
-        if model is None or price_source(model, getattr(agent, "price", None)) == "unknown":
-            raise ConfigError(f"--max-cost-usd needs a price, but the price of {model!r} is unknown; "
-                              "declare one with --price IN,OUT (USD per million tokens) or use --max-tokens")
-    from capmj.tasks import registry as _registry
-
-    manifest = build_manifest(agent, [_registry.get_task(t) for t in tasks])
-    if stored and stored.get("manifest"):
-        from capmj.bench.manifest import differences
-
-        for warning in differences({"stored run": stored["manifest"], "this resume": manifest}):
-            print(f"capmj-bench: warning: resuming under different conditions: {warning}", file=sys.stderr)
+    run_budget.check_price(agent)
+    manifest = run_manifest(agent, tasks, stored)
     _prepare_out(out)
 
     config = {
@@ -284,7 +270,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         "argv": list(argv),
         "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
                  "workers": workers, "log": log, "log_images": images,
-                 "run_budget": {"max_cost_usd": run_budget.max_cost_usd, "max_tokens": run_budget.max_tokens}},
+                 "run_budget": run_budget.as_dict()},
         "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
         "versions": manifest["packages"],
         "manifest": manifest,
@@ -297,15 +283,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     # ---- the episodes still to run
     existing, bad = read_results(out / EPISODES)
     done = {episode_key(r) for r in existing}
-    spent: list[dict[str, Any]] = list(existing)
-    stopped: list[str] = []
-
-    def over_budget() -> bool:
-        if run_budget.active and not stopped:
-            why = run_budget.exceeded(spent)
-            if why:
-                stopped.append(why)
-        return bool(stopped)
+    budget = BudgetTracker(run_budget, existing)
     jobs = []
     for t in tasks:
         for s in seeds:
@@ -328,7 +306,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     counts = {"n": 0, "ok": 0}
 
     def progress(rec: dict[str, Any]) -> None:
-        spent.append(rec)
+        budget.add(rec)
         counts["n"] += 1
         counts["ok"] += bool(rec.get("success"))
         if bar is not None:
@@ -341,7 +319,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     with ResultsWriter(out / EPISODES) as writer:
         try:
             stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
-                                     writer=writer, progress=progress, registered=registered, stop=over_budget)
+                                     writer=writer, progress=progress, registered=registered, stop=budget.stop)
         except KeyboardInterrupt:
             interrupted = True
             stats = None
@@ -354,7 +332,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     summary = summarize(records)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": counts["n"], "workers": workers,
                       "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
-                      "stopped_by_budget": stopped[0] if stopped else None}
+                      "stopped_by_budget": budget.reason}
     write_summary(out, summary, title=f"capmj benchmark results ({out.name})")
     for label, st in summary["overall"].items():
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
@@ -363,8 +341,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     if interrupted:
         print(f"capmj-bench: interrupted; continue with: python -m capmj.bench --out {out} --resume", file=sys.stderr)
         return 130
-    if stopped and len(records) < total:
-        print(f"capmj-bench: run budget reached: {stopped[0]}; {total - len(records)} episode(s) not started. "
+    if budget.reason and len(records) < total:
+        print(f"capmj-bench: run budget reached: {budget.reason}; {total - len(records)} episode(s) not started. "
               f"Continue with: python -m capmj.bench --out {out} --resume --max-cost-usd/--max-tokens <higher limit>",
               file=sys.stderr)
         return EXIT_BUDGET

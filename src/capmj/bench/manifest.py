@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 from urllib.parse import urlsplit
 
-__all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "package_versions", "sha256_file"]
+__all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "package_versions", "run_manifest",
+           "sha256_file"]
 
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
@@ -164,3 +165,14 @@ def differences(manifests: Mapping[str, Mapping[str, Any] | None]) -> list[str]:
 def _short(v: Any) -> str:
     s = str(v)
     return s[:12] if len(s) == 64 and all(c in "0123456789abcdef" for c in s) else s
+
+
+def run_manifest(agent: Any, task_names: Sequence[str], stored: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The manifest of a grid run; on a resume, warns (stderr) about what changed since."""
+    from capmj.tasks import registry
+
+    manifest = build_manifest(agent, [registry.get_task(t) for t in task_names])
+    if stored and stored.get("manifest"):
+        for warning in differences({"stored run": stored["manifest"], "this resume": manifest}):
+            print(f"capmj-bench: warning: resuming under different conditions: {warning}", file=sys.stderr)
+    return manifest

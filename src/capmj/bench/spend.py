@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from capmj.errors import ConfigError
 
-__all__ = ["RunBudget", "fmt_cost", "usage", "usage_of"]
+__all__ = ["BudgetTracker", "RunBudget", "fmt_cost", "usage", "usage_of"]
 
 
 def usage_of(rec: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -64,6 +64,28 @@ class RunBudget:
             if v is not None and not (v > 0 and math.isfinite(v)):
                 raise ConfigError(f"{name} must be positive, got {v}")
 
+    @classmethod
+    def resolve(cls, max_cost_usd: float | None, max_tokens: int | None,
+                stored: Mapping[str, Any] | None = None) -> "RunBudget":
+        """Limits from the command line, else those stored in the run's config.json (resume)."""
+        stored = stored or {}
+        return cls(max_cost_usd if max_cost_usd is not None else stored.get("max_cost_usd"),
+                   max_tokens if max_tokens is not None else stored.get("max_tokens"))
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"max_cost_usd": self.max_cost_usd, "max_tokens": self.max_tokens}
+
+    def check_price(self, agent: Any) -> None:
+        """ConfigError when a cost cap is asked for a model whose price is unknown."""
+        if self.max_cost_usd is None:
+            return
+        from capmj.agents.llm_meter import price_source
+
+        model = getattr(agent, "model", None)
+        if model is None or price_source(model, getattr(agent, "price", None)) == "unknown":
+            raise ConfigError(f"--max-cost-usd needs a price, but the price of {model!r} is unknown; "
+                              "declare one with --price IN,OUT (USD per million tokens) or use --max-tokens")
+
     @property
     def active(self) -> bool:
         return self.max_cost_usd is not None or self.max_tokens is not None
@@ -79,3 +101,20 @@ class RunBudget:
             if u["cost_usd"] >= self.max_cost_usd:
                 return f"the run cost {u['cost_usd']:.6f} USD (--max-cost-usd {self.max_cost_usd:g})"
         return None
+
+
+class BudgetTracker:
+    """The grid's stop condition: records of the folder so far, checked before each new episode."""
+
+    def __init__(self, budget: RunBudget, existing: Sequence[Mapping[str, Any]]) -> None:
+        self.budget = budget
+        self.records: list[Mapping[str, Any]] = list(existing)
+        self.reason: str | None = None
+
+    def add(self, rec: Mapping[str, Any]) -> None:
+        self.records.append(rec)
+
+    def stop(self) -> bool:
+        if self.budget.active and self.reason is None:
+            self.reason = self.budget.exceeded(self.records)
+        return self.reason is not None
