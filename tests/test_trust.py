@@ -102,12 +102,19 @@ def test_reporter_false_negative(server: StubLLMServer) -> None:
     assert got == "reporter_false_negative"
 
 
-def test_episode_token_budget_ends_the_episode_as_budget(server: StubLLMServer) -> None:
-    got, rec = label_of(server, code("say('hi')"), attempts=3, episode_max_tokens=50)
+@pytest.mark.parametrize("limit", ["tokens", "cost"])
+def test_episode_llm_budget_ends_the_episode_as_budget(server: StubLLMServer, limit: str) -> None:
+    kw: dict[str, Any] = ({"episode_max_tokens": 50} if limit == "tokens"
+                          else {"episode_max_cost_usd": 0.01, "price": "1000,1000"})
+    got, rec = label_of(server, code("say('hi')"), attempts=3, **kw)
     assert got == "budget" and rec["llm"]["stopped"] == "llm budget"
-    assert len(server.requests) == 1 and "token budget of 50" in rec["error"]
+    assert len(server.requests) == 1 and f"{'token' if limit == 'tokens' else 'cost'} budget of" in rec["error"]
     spend = rec["llm"]["spend"]
-    assert spend["tokens"] > 50 and spend["cost_usd"] is None and spend["price_source"] == "unknown"
+    assert spend["tokens"] > 50
+    if limit == "tokens":
+        assert spend["cost_usd"] is None and spend["price_source"] == "unknown"
+    else:
+        assert spend["cost_usd"] == pytest.approx(spend["tokens"] * 1000 / 1e6) and spend["cost_usd"] > 0.01
 
 
 def test_labels_are_documented() -> None:

@@ -31,7 +31,7 @@ from typing import Any
 from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import attempt_facts
 from capmj.agents.base import EpisodeContext
-from capmj.agents.llm_meter import LLMMeter, parse_price
+from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
@@ -82,8 +82,9 @@ class LLMAgent:
                                 backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None,
                                 cache_only=bool(cache_only))
         self.price = parse_price(price)
-        self.limits = {"max_tokens": episode_max_tokens, "max_cost_usd": episode_max_cost_usd}
-        LLMMeter(self._no_call, model, price=self.price, **self.limits)  # validates the limits now
+        tokens, cost = check_limits(model, max_tokens=episode_max_tokens, max_cost_usd=episode_max_cost_usd,
+                                    price=self.price)
+        self.limits = {"max_tokens": tokens, "max_cost_usd": cost}
         self.reporter = reporter
         self.attempts = attempts
         self.plan_budget = plan_budget or DEFAULT_PLAN_BUDGET
@@ -92,10 +93,6 @@ class LLMAgent:
         self.prompts_dir = Path(prompts_dir) if prompts_dir is not None else None
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
-
-    @staticmethod
-    def _no_call(*args: Any, **kwargs: Any) -> Any:
-        raise AssertionError("validation only")
 
     @property
     def model(self) -> str:

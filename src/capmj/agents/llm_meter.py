@@ -25,7 +25,7 @@ from typing import Any, Callable
 
 from capmj.errors import BudgetExceeded, ConfigError
 
-__all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "parse_price", "price_source"]
+__all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limits", "parse_price", "price_source"]
 
 
 class LLMBudgetExceeded(BudgetExceeded):
@@ -83,6 +83,17 @@ def _check_limit(value: Any, name: str, kind: type) -> Any:
     return v
 
 
+def check_limits(model: str, *, max_tokens: Any = None, max_cost_usd: Any = None,
+                 price: Price | None = None) -> tuple[int | None, float | None]:
+    """The episode limits, validated: positive numbers, and a cost cap only with a known price."""
+    tokens = _check_limit(max_tokens, "episode_max_tokens", int)
+    cost = _check_limit(max_cost_usd, "episode_max_cost_usd", float)
+    if cost is not None and price_source(model, price) == "unknown":
+        raise ConfigError(f"episode_max_cost_usd needs a price, but the price of {model!r} is unknown; "
+                          "declare one (price 'IN,OUT' in USD per million tokens) or cap tokens instead")
+    return tokens, cost
+
+
 class LLMMeter:
     """Wraps a ``complete(messages, purpose=...)`` callable (``LLMClient.complete``)."""
 
@@ -90,14 +101,11 @@ class LLMMeter:
                  max_cost_usd: float | None = None, price: Price | None = None,
                  source: str | None = None) -> None:
         self._complete = complete
-        self.max_tokens = _check_limit(max_tokens, "episode_max_tokens", int)
-        self.max_cost_usd = _check_limit(max_cost_usd, "episode_max_cost_usd", float)
+        self.max_tokens, self.max_cost_usd = check_limits(model, max_tokens=max_tokens, max_cost_usd=max_cost_usd,
+                                                          price=price)
         self.price = price
         self.model = model
         self._source = source
-        if self.max_cost_usd is not None and self.source == "unknown":
-            raise ConfigError(f"episode_max_cost_usd needs a price, but the price of {model!r} is unknown; "
-                              "declare one (price 'IN,OUT' in USD per million tokens) or cap tokens instead")
         self.calls: list[dict[str, Any]] = []
         self.attempt = 1
         self.prompt_tokens = 0
