@@ -53,7 +53,7 @@ CHEAP = {  # label: planner answer (no pick-and-place happens)
     "syntax": code("for block in\n    put_first_on_second(block)"),
     "sandbox_violation": code("import os\nos.system('echo hi')"),
     "budget": code("while True:\n    pass"),
-    "unknown_object": code(f"put_first_on_second('the red block', '{ORANGE}')"),
+    "unknown_object": code(f"put_first_on_second('the green block', '{ORANGE}')"),  # no green object
     "api_misuse": code(f"put_first_on_second(3.5, '{ORANGE}')"),
     "plan_exception": code("blocks = []\nfirst = blocks[0]"),
     "helper_lmp": code("blocks = parse_obj_name('all the blocks', f'objects = {get_obj_names()}')\nsay(blocks)"),
@@ -64,8 +64,8 @@ CHEAP = {  # label: planner answer (no pick-and-place happens)
 @pytest.mark.parametrize("label", list(CHEAP))
 def test_failure_label_of_a_failing_plan(server: StubLLMServer, label: str) -> None:
     handlers = {"parse_obj_name": code("ret_val = [")} if label == "helper_lmp" else {}
-    got, rec = label_of(server, CHEAP[label], handlers=handlers,
-                        plan_budget=SandboxBudget(wall_s=0.5, max_api_calls=100))
+    budget = {"plan_budget": SandboxBudget(wall_s=0.5, max_api_calls=100)} if label == "budget" else {}
+    got, rec = label_of(server, CHEAP[label], handlers=handlers, **budget)
     assert got == label, (rec["error"], rec["llm"]["attempts"])
     assert rec["success"] is False and rec["primitives"] == (1 if label == "motion" else 0)
 
