@@ -59,12 +59,12 @@ class LLMAgent:
 
     def __init__(self, model: str = "gpt-4o-mini", api_base: str | None = None, reporter: str = "none",
                  attempts: int = 1, temperature: float = 0.0, timeout_s: float = 60.0,
-                 cache_dir: str | Path | None = None, max_tokens: int = 2048, *,
+                 cache_dir: str | Path | None = None, max_tokens: int = 2048, *, cache_only: bool = False,
                  api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
                  max_fn_depth: int = 3, prompts_dir: str | Path | None = None,
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
-                 price: str | None = None, cache_only: bool = False) -> None:
+                 price: str | None = None) -> None:
         if reporter not in REPORTERS:
             raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
         try:
