@@ -104,7 +104,7 @@ class LLMAgent:
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
-        meter = self.meter = LLMMeter(client.complete, self.model, price=self.price, **self.limits)
+        meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
@@ -159,7 +159,8 @@ class LLMAgent:
                  reporter: Any, feedback: Feedback | None
                  ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
         api = PlannerAPI(ctx)
-        session = LMPSession(complete=self.meter.complete, api=api.functions(), objects_text=api.objects_text,
+        complete = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
+        session = LMPSession(complete=complete, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
         calls_before = len(client.records)

@@ -1,6 +1,6 @@
 """Metering of an episode's LLM calls: tokens, cost (or *unknown*), budgets, and the call log.
 
-Every LMP call of the LLM agent goes through :meth:`LLMMeter.complete`, which
+Every LMP call of the LLM agent goes through a callable made by :meth:`LLMMeter.wrap`, which
 
 * keeps the call (messages sent, completion received, tokens, cost, cache hit) for the result
   folder's transcripts (``python -m capmj.bench export`` turns them into fine-tuning data);
@@ -95,12 +95,10 @@ def check_limits(model: str, *, max_tokens: Any = None, max_cost_usd: Any = None
 
 
 class LLMMeter:
-    """Wraps a ``complete(messages, purpose=...)`` callable (``LLMClient.complete``)."""
+    """Meters ``complete(messages, purpose=...)`` callables (``LLMClient.complete``) of one episode."""
 
-    def __init__(self, complete: Callable[..., Any], model: str, *, max_tokens: int | None = None,
-                 max_cost_usd: float | None = None, price: Price | None = None,
-                 source: str | None = None) -> None:
-        self._complete = complete
+    def __init__(self, model: str, *, max_tokens: int | None = None, max_cost_usd: float | None = None,
+                 price: Price | None = None, source: str | None = None) -> None:
         self.max_tokens, self.max_cost_usd = check_limits(model, max_tokens=max_tokens, max_cost_usd=max_cost_usd,
                                                           price=price)
         self.price = price
@@ -132,10 +130,17 @@ class LLMMeter:
                     f"({self.cost_usd:.6f} USD used)")
         return None
 
-    def complete(self, messages: Any, *, purpose: str = "", **kwargs: Any) -> Any:
+    def wrap(self, complete: Callable[..., Any]) -> Callable[..., Any]:
+        """``complete`` metered: logged, counted, and refused once the episode is over budget."""
+        def metered(messages: Any, *, purpose: str = "", **kwargs: Any) -> Any:
+            return self._call(complete, messages, purpose, kwargs)
+
+        return metered
+
+    def _call(self, complete: Callable[..., Any], messages: Any, purpose: str, kwargs: dict[str, Any]) -> Any:
         if self.exceeded is not None:
             raise LLMBudgetExceeded(str(self.exceeded))
-        completion = self._complete(messages, purpose=purpose, **kwargs)
+        completion = complete(messages, purpose=purpose, **kwargs)
         pt, ct = int(completion.prompt_tokens), int(completion.completion_tokens)
         if self.price is not None:
             cost: float | None = self.price.cost(pt, ct)
