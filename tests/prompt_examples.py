@@ -84,6 +84,8 @@ class ExampleLLM:
 
     prompts: Mapping[str, PromptFile] = field(default_factory=lambda: {n: load_prompt(n) for n in ALL_LMPS})
     asked: list[tuple[str, str]] = field(default_factory=list)
+    drop_first_code_line: bool = False
+    """Answer without the example's first code line (as a small model copying it did)."""
 
     def answer(self, user_text: str) -> tuple[str, str]:
         """(lmp, answer text) for a rendered prompt."""
@@ -95,6 +97,10 @@ class ExampleLLM:
                 for ex in prompt.examples:
                     q, code = query_of(ex)
                     if q.strip() == query:
+                        if self.drop_first_code_line:
+                            lines = code.splitlines(keepends=True)
+                            first = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#"))
+                            code = "".join(lines[:first] + lines[first + 1:])
                         return name, f"```python\n{code}```"
                 raise AssertionError(f"no {name} example answers {query!r}")
         raise AssertionError(f"unknown prompt: {user_text[:200]!r}")

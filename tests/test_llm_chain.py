@@ -65,6 +65,7 @@ def lmp_of(request: dict[str, Any]) -> str:
     """Which LMP a request comes from (by its prompt file's first instruction line)."""
     text = prompt_text(request)
     markers = {
+        "You check from a list of object poses": "reporter_direct",
         "Write the plan for the goal in the last comment": "planner",
         "Set ret_val to the object names": "parse_obj_name",
         "Set ret_val to the position": "parse_position",
@@ -216,7 +217,11 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
                      "api_calls", "verdict"):
             assert f"llm/attempt{k}/{path}" in rec.texts, (k, path)
     assert "put_first_on_second" in rec.texts["llm/attempt1/api_calls"][0]
-    assert rec.texts["llm/attempt1/verdict"] == ["not achieved"]
+    assert rec.texts["llm/attempt1/verdict"] == ["not achieved (reporter verdict from code; task predicate: False)"]
+    # per attempt: where the verdict came from, the predicate on the same state, whether the plan changed
+    assert (first["verdict_source"], first["predicate"], first["code_differs"]) == ("code", False, None)
+    assert (second["verdict_source"], second["predicate"], second["code_differs"]) == ("code", True, True)
+    assert first["temperature"] == 0.0 and second["temperature"] == 0.7
 
 
 def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:
@@ -362,9 +367,10 @@ def test_vlm_reporter_sends_images_and_parses_the_verdict_from_code(server: Stub
     rec = MemoryRecorder()
     result = episode(agent(server, reporter="vlm"), rec)
     (attempt,) = result.llm["attempts"]
-    if attempt.get("reporter_error", "").startswith("no images"):
-        pytest.skip(f"no OpenGL renderer: {attempt['reporter_error']}")
+    if any("no images" in e for e in attempt["reporter_errors"]):
+        pytest.skip(f"no OpenGL renderer: {attempt['reporter_errors']}")
     assert attempt["verdict"] is False and "not stacked" in attempt["report"]
+    assert attempt["verdict_source"] == "code" and attempt["predicate"] is True  # a false negative
     assert result.success  # the predicate judges the scene, the reporter only drives re-planning
     vlm = [r for r in server.requests if lmp_of(r) == "vlm_reporter"]
     assert len(vlm) == 1
@@ -465,3 +471,9 @@ def test_bench_cli_runs_the_llm_agent_in_a_worker_and_logs_every_prompt(server: 
         assert f"llm/attempt{k}/planner/1/prompt" in log.texts
         assert f"llm/attempt{k}/planner/1/code" in log.texts
     assert "put_first_on_second" in log.texts["llm/attempt2/planner/1/code"][0]
+    # the closed-loop figures are in summary.json and summary.md
+    loop = json.loads((out / "summary.json").read_text())["overall"]["llm openai/stub"]["loop"]
+    assert (loop["reporter_runs"], loop["verdicts"], loop["agree"], loop["compared"]) == (2, 2, 2, 2)
+    assert (loop["replans"], loop["identical_replans"]) == (1, 0)
+    assert loop["mean_tokens"] == rec["llm"]["prompt_tokens"] + rec["llm"]["completion_tokens"] > 0
+    assert "| **Overall** | llm openai/stub | 1/1 (100 %) | 2.00 | 2/2 (100 %) |" in (out / "summary.md").read_text()

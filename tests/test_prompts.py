@@ -128,16 +128,33 @@ def test_parse_function_example_defines_working_function(lmp: str, example) -> N
 
 
 @pytest.mark.parametrize(("lmp", "example"), examples("parse_completion"), ids=lambda v: getattr(v, "id", v))
-def test_parse_completion_example_judges_truth(lmp: str, example) -> None:
+@pytest.mark.parametrize("drop_first_line", [False, True], ids=["whole", "first-line-dropped"])
+def test_parse_completion_example_judges_truth(lmp: str, example, drop_first_line: bool) -> None:
+    """The text reporter's examples run through the real reporter (pre-bound names, sandbox) and
+    judge their scene right; with the example's first code line dropped (what a small model did)
+    they still reach a verdict."""
+    from capmj.agents.reporter import TextReporter
+
     ctx = build_context(example)
-    session, _ = session_for(ctx)
+    llm = ExampleLLM()
+    if drop_first_line:
+        llm = ExampleLLM(drop_first_code_line=True)
+    session, _ = session_for(ctx, llm)
     query, _code = query_of(example)
     goal = query.removeprefix("# goal:").strip()
-    judge, reason = session.parse_completion(goal)
+    report = TextReporter().judge(session, ctx, goal)
+    assert [lmp for lmp, _ in llm.asked] == ["parse_completion"], "the first answer must give the verdict"
+    assert report.source == "code" and report.error is None, report
+    if drop_first_line:
+        assert report.verdict is not None, report
+        return
     expected = example.json("expect")
     assert isinstance(expected, bool)
-    assert judge is expected, (example.id, judge, reason)
-    assert reason, "reporter examples explain their verdict"
+    assert report.verdict is expected, (example.id, report)
+    assert report.reason, "reporter examples explain their verdict"
+    call = next(c for c in session.transcript if c.lmp == "parse_completion")
+    assert call.result is not None and f"wrong = {list(report.wrong)!r}" in call.result
+    _check(session.helper_env(), example, {"wrong": list(report.wrong), "judge": report.verdict})
     if "task" in example.meta:  # when a task predicate applies, it agrees
         assert ctx.verdict().success is expected
 

@@ -4,17 +4,20 @@ Per episode (``act``)::
 
     for attempt k = 1 .. attempts:
         if k > 1: ctx.reset()                      # back to the episode's initial state
-        plan = planner LMP(objects, goal [, previous plan + failure report])
+        plan = planner LMP(objects, goal [, previous plan with line numbers + what happened])
+               (k > 1: at replan_temperature; a plan identical to an earlier one is asked again once)
         run plan in the sandbox (API + parse_obj_name / parse_position / parse_function)
-        verdict = reporter (none | text | vlm)
-        stop unless the plan raised or the verdict is False
+        verdict = reporter (none | text | vlm): code -> repair -> direct structured verdict -> unknown
+        predicate = the task's success predicate on the same state (recorded, never shown to the LLM)
+        stop when the verdict is True, or there is no reporter and the plan finished,
+             or the verdict is unknown and on_unknown == "stop"
 
 CapRavens re-ran the *old* plan before the new one after a failed verdict; capmj resets the scene
-and runs only the new plan.  Every attempt is recorded (code, error, verdict, report) in
-``ctx.notes["llm"]["attempts"]`` and under ``llm/attempt{k}/`` in the episode log, with LLM usage
-(calls, cached calls, tokens, cost) in ``ctx.notes["llm"]``, which the runner copies into the
-episode result.  The full transcript (every prompt, completion and executed code) is kept in
-``ctx.notes["llm_transcript"]`` and :attr:`LLMAgent.transcript`.
+and runs only the new plan.  Every attempt is recorded in ``ctx.notes["llm"]["attempts"]`` (one
+plain dict per attempt, see :data:`ATTEMPT_FIELDS`) and under ``llm/attempt{k}/`` in the episode
+log, with LLM usage (calls, cached calls, tokens, cost) in ``ctx.notes["llm"]``, which the runner
+copies into the episode result.  The full transcript (every prompt, completion and executed code)
+is kept in ``ctx.notes["llm_transcript"]`` and :attr:`LLMAgent.transcript`.
 
 Failures: bad code (no code, syntax error, sandbox violation, endless loop, huge allocation,
 an exception) ends *that* attempt with a recorded error, and the next attempt re-plans with the
@@ -25,6 +28,7 @@ attempts.  The last attempt's error is re-raised so that the runner records it i
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -36,10 +40,44 @@ from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
-from capmj.errors import ConfigError, LLMError
+from capmj.errors import ConfigError, LLMError, PlanError
 from capmj.llm import LLMClient, LLMConfig
 
-__all__ = ["CACHE_ENV", "DEFAULT_LMP_BUDGET", "LLMAgent"]
+__all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_TEMPERATURE", "LLMAgent",
+           "ON_UNKNOWN"]
+
+ON_UNKNOWN = ("replan", "stop")
+"""What an unknown reporter verdict does: re-plan like a False verdict (default), or stop."""
+
+DEFAULT_REPLAN_TEMPERATURE = 0.7
+"""Sampling temperature of the planner calls of attempts 2, 3, ... (at 0 a small model repeated
+its failed plan byte for byte)."""
+
+ATTEMPT_FIELDS: dict[str, str] = {
+    "attempt": "1, 2, ...",
+    "reset": "the scene was reset to the initial state before this attempt",
+    "temperature": "sampling temperature of this attempt's planner calls",
+    "code": "the plan as it ran (after import clean-up and parse_function), None without code",
+    "code_differs": "the plan differs from every earlier attempt's plan (None for attempt 1)",
+    "identical_to": "the earliest earlier attempt with the same plan, else None",
+    "extra_request": "the first answer repeated an earlier plan and a different one was asked for",
+    "error": "the plan's error ('PlanError: line 3: ...'), None when it finished",
+    "error_kind": "'plan' or 'llm' (only when error is set)",
+    "error_line": "line of the plan the error points at, else None",
+    "verdict": "the reporter's verdict: True, False, or None (unknown, no reporter, or the plan failed)",
+    "verdict_source": "'code', 'repair', 'direct' or 'unknown'; None when no reporter ran",
+    "reason": "the reporter's one-line reason",
+    "wrong": "objects whose state the reporter says is wrong",
+    "reporter_errors": "problems met on the way to the verdict ('code: ...', 'repair: ...')",
+    "predicate": "the task's success predicate on the state the reporter judged (None if it failed)",
+    "predicate_progress": "the predicate's progress in [0, 1] on that state",
+    "on_unknown": "the policy applied to an unknown verdict ('replan'/'stop'), else None",
+    "report": "what the next attempt is told (verdict/error and object positions)",
+    "primitives": "pick-and-place calls", "api_calls": "planner API calls",
+    "llm_calls": "LLM calls", "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
+    "said": "messages of the plan's say()",
+}
+"""The keys of every attempt record in ``result.llm["attempts"]`` and their meaning."""
 
 CACHE_ENV = "CAPMJ_LLM_CACHE"
 """Default cache folder for LLM completions when ``cache_dir`` is not given."""
@@ -62,9 +100,18 @@ class LLMAgent:
                  cache_dir: str | Path | None = None, max_tokens: int = 2048, *, cache_only: bool = False,
                  api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
-                 max_fn_depth: int = 3, prompts_dir: str | Path | None = None,
+                 max_fn_depth: int = 3, prompts_dir: str | Path | None = None, on_unknown: str = "replan",
+                 replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
                  price: str | None = None) -> None:
+        if on_unknown not in ON_UNKNOWN:
+            raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
+        try:
+            replan_temperature = float(replan_temperature)
+        except (TypeError, ValueError):
+            raise ConfigError(f"replan_temperature must be a number >= 0, got {replan_temperature!r}") from None
+        if not replan_temperature >= 0:
+            raise ConfigError(f"replan_temperature must be >= 0, got {replan_temperature}")
         if reporter not in REPORTERS:
             raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
         try:
@@ -87,36 +134,43 @@ class LLMAgent:
         self.limits = {"max_tokens": tokens, "max_cost_usd": cost}
         self.reporter = reporter
         self.attempts = attempts
+        self.on_unknown = on_unknown
+        self.replan_config = replace(self.config, temperature=replan_temperature)
         self.plan_budget = plan_budget or DEFAULT_PLAN_BUDGET
         self.lmp_budget = lmp_budget or DEFAULT_LMP_BUDGET
         self.max_fn_depth = int(max_fn_depth)
         self.prompts_dir = Path(prompts_dir) if prompts_dir is not None else None
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
+        self.replan_client: LLMClient | None = None
 
     @property
     def model(self) -> str:
         return self.config.model
 
-    def _client(self) -> LLMClient:
-        return LLMClient(self.config)
+    def _client(self, config: LLMConfig | None = None) -> LLMClient:
+        return LLMClient(config or self.config)
 
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
+        replan_client = self.replan_client = self._client(self.replan_config)
+        clients = (client, replan_client)
         meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
         attempts: list[dict[str, Any]] = []
         notes: dict[str, Any] = {"model": self.model, "reporter": self.reporter, "max_attempts": self.attempts,
-                                 "attempts": attempts}
+                                 "on_unknown": self.on_unknown, "temperature": self.config.temperature,
+                                 "replan_temperature": self.replan_config.temperature, "attempts": attempts}
         ctx.notes["llm"] = notes
         ctx.notes["llm_transcript"] = transcript
-        self._usage(client, notes)
+        self._usage(clients, notes)
         goal = ctx.scene.goal
         reporter = make_reporter(self.reporter, self.prompts_dir)
         feedback: Feedback | None = None
+        plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
         last_error: BaseException | None = None
         try:
             if reporter is not None:
@@ -125,11 +179,15 @@ class LLMAgent:
                 if k > 1:
                     ctx.reset()
                 meter.attempt = k
-                record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter, feedback)
+                record, error, report, outcome = self._attempt(ctx, clients, transcript, k, goal, reporter,
+                                                               feedback, plans)
+                plans.append(outcome.key)
                 attempts.append(record)
-                self._usage(client, notes)
-                self._record_attempt(ctx, record)
                 last_error = error
+                unknown = error is None and report is not None and report.verdict is None
+                record["on_unknown"] = self.on_unknown if unknown else None
+                self._usage(clients, notes)
+                self._record_attempt(ctx, record)
                 if meter.exceeded is not None:
                     notes["stopped"] = "llm budget"
                     last_error = error or meter.exceeded
@@ -137,7 +195,8 @@ class LLMAgent:
                 if isinstance(error, LLMError):
                     notes["stopped"] = "llm error"
                     break
-                failed = error is not None or (report is not None and report.verdict is False)
+                failed = error is not None or (report is not None and report.verdict is False) or (
+                    unknown and self.on_unknown == "replan")
                 if not failed:
                     notes["stopped"] = "reporter: achieved" if report is not None and report.verdict else (
                         "reporter: unknown" if report is not None else "plan finished")
@@ -145,67 +204,102 @@ class LLMAgent:
                 if k == self.attempts:
                     notes["stopped"] = "attempts used up"
                     break
-                feedback = Feedback(completion=outcome.completion or "", report=record["report"])
+                feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
+                                    error=record["error"], error_line=record["error_line"],
+                                    report=report.text() if report is not None else "",
+                                    scene=self._scene_summary(ctx))
         finally:
             if reporter is not None:
                 reporter.close()
-            self._usage(client, notes)
+            self._usage(clients, notes)
             notes["spend"] = meter.summary()
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
 
-    def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
-                 reporter: Any, feedback: Feedback | None
+    def _attempt(self, ctx: EpisodeContext, clients: tuple[LLMClient, LLMClient], transcript: list[LMPCall],
+                 k: int, goal: str, reporter: Any, feedback: Feedback | None, plans: list[str | None]
                  ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
+        client, replan_client = clients
+
+        def complete(messages: list[dict[str, Any]], purpose: str = "") -> Any:
+            """Planner calls of re-plans sample at the re-plan temperature; everything else does not."""
+            use = replan_client if k > 1 and purpose.startswith("planner#") else client
+            return use.complete(messages, purpose=purpose)
+
         api = PlannerAPI(ctx)
-        complete = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
-        session = LMPSession(complete=complete, api=api.functions(), objects_text=api.objects_text,
+        session = LMPSession(complete=self.meter.wrap(complete),  # logged, counted, stopped by the LLM budget api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
-        calls_before = len(client.records)
-        record: dict[str, Any] = {"attempt": k, "reset": k > 1, "code": None, "error": None, "verdict": None,
-                                  "report": "", "primitives": 0, "llm_calls": 0, "api_calls": 0}
+        before = [list(c.records) for c in clients]
+        record: dict[str, Any] = {
+            "attempt": k, "reset": k > 1,
+            "temperature": (replan_client if k > 1 else client).config.temperature,
+            "code": None, "code_differs": None, "identical_to": None, "extra_request": False,
+            "error": None, "error_line": None, "verdict": None, "verdict_source": None, "reason": "", "wrong": [],
+            "reporter_errors": [], "predicate": None, "predicate_progress": None, "on_unknown": None,
+            "report": "", "primitives": 0, "llm_calls": 0, "prompt_tokens": 0, "completion_tokens": 0,
+            "api_calls": 0, "said": []}
         outcome = PlanOutcome()
         error: BaseException | None = None
         report: Report | None = None
         try:
-            plan_and_run(session, goal, feedback=feedback, budget=self.plan_budget, outcome=outcome)
+            plan_and_run(session, goal, feedback=feedback, previous=plans, budget=self.plan_budget, outcome=outcome)
         except Exception as exc:  # noqa: BLE001 - every failure ends this attempt, recorded
             llm_error = find_llm_error(exc)
             error = llm_error if llm_error is not None else exc
-        if error is None and reporter is not None:
+        if not isinstance(error, LLMError):
             try:
                 ctx.world.settle(max_steps=1000)
-                report = reporter.judge(session, ctx, goal)
+                if error is None and reporter is not None:
+                    report = reporter.judge(session, ctx, goal)
             except Exception as exc:  # noqa: BLE001
                 llm_error = find_llm_error(exc)
                 if llm_error is not None:
                     error = llm_error
                 else:
-                    report = Report(reporter.mode, None, "", f"reporter failed: {type(exc).__name__}: {exc}")
+                    report = Report(reporter.mode, None, "", f"reporter failed: {type(exc).__name__}: {exc}",
+                                    "unknown", (), (f"reporter failed: {type(exc).__name__}: {exc}",))
+            self._predicate(ctx, record)  # the same state the reporter judged
         record["code"] = outcome.code
+        if k > 1 and outcome.key is not None:
+            record["code_differs"] = outcome.identical_to is None
+            record["identical_to"] = outcome.identical_to
+        record["extra_request"] = outcome.extra_request
         record["primitives"] = ctx.primitives
-        record["llm_calls"] = len(client.records) - calls_before
+        new = [r for c, old in zip(clients, before) for r in c.records[len(old):]]
+        record["llm_calls"] = len(new)
+        record["prompt_tokens"] = sum(r.prompt_tokens for r in new)
+        record["completion_tokens"] = sum(r.completion_tokens for r in new)
         record["api_calls"] = len(api.call_log)
         record["said"] = list(api.messages)
         if error is not None:
             record["error"] = f"{type(error).__name__}: {error}"
             record["error_kind"] = "llm" if isinstance(error, LLMError) else "plan"
+            record["error_line"] = error.line if isinstance(error, PlanError) else None
             record["report"] = self._error_report(error, ctx)
             record.update(attempt_facts(transcript, k, record["error"], api.call_log))
         if report is not None:
             record["verdict"] = report.verdict
+            record["verdict_source"] = report.source
+            record["reason"] = report.reason
+            record["wrong"] = list(report.wrong)
+            record["reporter_errors"] = list(report.errors)
             record["report"] = report.text() + "\n" + self._scene_summary(ctx)
             if report.error:
                 record["reporter_error"] = report.error
-            if "predicate" not in record:  # the task's judgement of the state the reporter judged
-                try:
-                    record["predicate"] = bool(ctx.task.evaluate(ctx.scene, ctx.world.state()).success)
-                except Exception:  # noqa: BLE001 - a fact for attribution only
-                    pass
         ctx.recorder.text(f"llm/attempt{k}/api_calls", api.log_text())
         return record, error, report, outcome
+
+    @staticmethod
+    def _predicate(ctx: EpisodeContext, record: dict[str, Any]) -> None:
+        """The task's predicate on the current state, for the record only (the LLM never sees it)."""
+        try:
+            verdict = ctx.task.evaluate(ctx.scene, ctx.world.state())
+        except Exception:  # noqa: BLE001 - the runner's final evaluation reports a broken predicate
+            return
+        record["predicate"] = bool(verdict.success)
+        record["predicate_progress"] = float(verdict.progress)
 
     # ------------------------------------------------------------------ helpers
     @staticmethod
@@ -229,16 +323,18 @@ class LLMAgent:
         rec = ctx.recorder
         if record.get("error"):
             rec.text(f"llm/attempt{k}/error", record["error"])
-        verdict = record.get("verdict")
-        rec.text(f"llm/attempt{k}/verdict",
-                 {True: "achieved", False: "not achieved", None: "unknown"}[verdict]
-                 + (f" (error: {record['error']})" if record.get("error") else ""))
+        verdict, source = record.get("verdict"), record.get("verdict_source")
+        word = {True: "achieved", False: "not achieved", None: "unknown"}[verdict]
+        if source is not None:
+            word += f" (reporter verdict from {source}; task predicate: {record.get('predicate')})"
+        rec.text(f"llm/attempt{k}/verdict", word + (f" (error: {record['error']})" if record.get("error") else ""))
         if record.get("report"):
             rec.text(f"llm/attempt{k}/report", record["report"])
 
     @staticmethod
-    def _usage(client: LLMClient, notes: dict[str, Any]) -> None:
-        u = client.usage()
-        notes.update(calls=u.calls, cached_calls=u.cached_calls, failed_calls=u.failed_calls,
-                     prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
-                     cost_usd=round(u.cost_usd, 8), latency_s=round(u.latency_s, 3))
+    def _usage(clients: tuple[LLMClient, ...], notes: dict[str, Any]) -> None:
+        us = [c.usage() for c in clients]
+        notes.update(calls=sum(u.calls for u in us), cached_calls=sum(u.cached_calls for u in us),
+                     failed_calls=sum(u.failed_calls for u in us), prompt_tokens=sum(u.prompt_tokens for u in us),
+                     completion_tokens=sum(u.completion_tokens for u in us),
+                     cost_usd=round(sum(u.cost_usd for u in us), 8), latency_s=round(sum(u.latency_s for u in us), 3))

@@ -256,26 +256,6 @@ class LMPSession:
         question = f"{ctx.strip()}\n# {_sentence(description)}"
         return self.run_lmp("parse_position", question, "ret_val", query=str(description))
 
-    def parse_completion(self, goal: str, context: str | None = None) -> tuple[bool | None, str]:
-        """The text reporter: (judge, reason).  ``judge`` None when the code gave no bool."""
-        ctx = context if isinstance(context, str) and context.strip() else self.objects_text()
-        question = f"{ctx.strip()}\n# goal: {_sentence(goal)}"
-        call = self.next_call("parse_completion", goal)
-        try:
-            ns = self._ask_and_run(call, "parse_completion", question)
-        except PlanError as exc:
-            return None, f"the checking code failed: {exc}"
-        judge = ns.get("judge")
-        reason = ns.get("reason")
-        reason = reason if isinstance(reason, str) else ""
-        if isinstance(judge, bool) or type(judge).__name__ == "bool_":
-            verdict: bool | None = bool(judge)
-        else:
-            verdict = None
-            self.record(call, "error", f"judge is {_short_repr(judge)}, not a bool")
-        self.record(call, "result", f"judge = {verdict!r}\nreason = {reason!r}")
-        return verdict, reason
-
     def parse_function(self, name: str, site: str) -> str:
         """Source of ``def name(...)`` written for the call statement ``site``."""
         site = " ".join(site.split())

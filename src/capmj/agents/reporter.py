@@ -2,34 +2,50 @@
 
 Two modes, as in CapRavens:
 
-* **text** — the ``parse_completion`` LMP writes checking code over the live object poses
-  (``get_obj_pos_dict()``...) that sets ``judge`` (bool) and ``reason``; the code runs in the
-  sandbox with the read-only API.
+* **text** — the ``parse_completion`` LMP writes checking code over the settled scene that sets
+  ``judge`` (bool), ``reason`` and optionally ``wrong`` (names of the objects whose state is
+  wrong); the code runs in the sandbox with the read-only API plus the pre-bound names of
+  :mod:`capmj.agents.reporter_env` (``poses``, ``sizes``, ``goal_objects``, ``in_zone`` ...), so a
+  completion that drops its first line still runs.
 * **vlm** — a vision-language model gets the initial and the final RGB image of the FRONT camera
   plus the final depth as a *visible* colour map (the original converted metric depth to 8-bit
   integers, i.e. an almost black image) and answers with a code block setting ``judge``.  The
   verdict is read by parsing that code and literal-evaluating the assignment (the original
   searched the answer for the substring "True", so "not True" counted as success).
 
-A verdict is ``True``, ``False`` or ``None`` (unknown: unparseable answer, failing checking code,
-no renderer); only ``False`` triggers a re-plan.
+Both modes try hard to reach a verdict; the :class:`Report` says which step gave it
+(``source``):
+
+1. ``code`` — the first answer (text: its checking code ran and set a bool ``judge``; vlm: its
+   code block assigns a literal bool);
+2. ``repair`` — one more request in the same conversation, with the error (and the failing line);
+3. ``direct`` — a structured question without code or images (``prompts/reporter_direct.txt``):
+   the object poses and the goal, answered as ``judge = True/False`` + ``reason`` (+ ``wrong``),
+   parsed with :mod:`ast`, never executed;
+4. ``unknown`` — none of these gave a bool.  What an unknown verdict does to the loop is the
+   agent's ``on_unknown`` policy (:mod:`capmj.agents.llm_agent`).
 """
 
 from __future__ import annotations
 
 import ast
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from capmj.agents.lmp import LMPSession, load_system_prompt, prompts_dir
-from capmj.agents.sandbox import extract_code
+from capmj.agents.lmp import LMPCall, LMPSession, load_system_prompt, prompts_dir
+from capmj.agents.reporter_env import PREBOUND, reporter_env
+from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import CapmjError, ConfigError, PlanError
 
-__all__ = ["REPORTERS", "Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
+__all__ = ["REPORTERS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict", "make_reporter",
+           "parse_verdict", "parse_wrong"]
 
 REPORTERS = ("none", "text", "vlm")
+SOURCES = ("code", "repair", "direct", "unknown")
+"""Where a verdict came from (see the module docstring), in the order they are tried."""
 
 
 @dataclass(frozen=True)
@@ -40,13 +56,21 @@ class Report:
     verdict: bool | None
     reason: str = ""
     error: str | None = None
+    """The last problem met on the way (None when the first answer gave the verdict)."""
+    source: str = "unknown"
+    wrong: tuple[str, ...] = ()
+    """Objects whose state the reporter says is wrong (when it named them)."""
+    errors: tuple[str, ...] = ()
+    """Every problem met on the way, in order (``"code: ..."``, ``"repair: ..."``, ...)."""
 
     def text(self) -> str:
         word = {True: "ACHIEVED", False: "NOT ACHIEVED", None: "UNKNOWN"}[self.verdict]
         out = f"reporter ({self.mode}): goal {word}"
         if self.reason:
             out += f"; {self.reason}"
-        if self.error:
+        if self.wrong:
+            out += f"\nobjects whose state is wrong: {list(self.wrong)}"
+        if self.error and self.verdict is None:  # how a known verdict was reached is in ``errors``
             out += f" [{self.error}]"
         return out
 
@@ -54,6 +78,9 @@ class Report:
 # ------------------------------------------------------------------------------------------------
 # verdict parsing
 # ------------------------------------------------------------------------------------------------
+_NOT_LITERAL = object()
+
+
 def _literal_assignments(tree: ast.AST, name: str) -> list[Any]:
     values: list[Any] = []
     for node in ast.walk(tree):
@@ -71,7 +98,25 @@ def _literal_assignments(tree: ast.AST, name: str) -> list[Any]:
     return values
 
 
-_NOT_LITERAL = object()
+def _answer_trees(text: str) -> list[ast.AST] | None:
+    """Syntax trees of an answer's code: the whole block, else each ``judge``/``reason``/``wrong``
+    line on its own (a broken block still yields its verdict lines); None without code."""
+    try:
+        code = extract_code(text)
+    except PlanError:
+        return None
+    try:
+        return [ast.parse(code)]
+    except (SyntaxError, ValueError):
+        trees: list[ast.AST] = []
+        for line in code.splitlines():
+            stripped = line.strip()
+            if stripped.startswith(("judge", "reason", "wrong")):
+                try:
+                    trees.append(ast.parse(stripped))
+                except (SyntaxError, ValueError):
+                    continue
+        return trees
 
 
 def parse_verdict(text: str) -> tuple[bool | None, str, str | None]:
@@ -82,21 +127,9 @@ def parse_verdict(text: str) -> tuple[bool | None, str, str | None]:
     them agree on one bool.  When the block does not parse as a whole, each line that assigns
     ``judge``/``reason`` is parsed on its own.  Never executes anything.
     """
-    try:
-        code = extract_code(text)
-    except PlanError:
+    trees = _answer_trees(text)
+    if trees is None:
         return None, "", "no code in the answer"
-    trees: list[ast.AST] = []
-    try:
-        trees.append(ast.parse(code))
-    except (SyntaxError, ValueError):
-        for line in code.splitlines():
-            stripped = line.strip()
-            if stripped.startswith(("judge", "reason")):
-                try:
-                    trees.append(ast.parse(stripped))
-                except (SyntaxError, ValueError):
-                    continue
     judges = [v for t in trees for v in _literal_assignments(t, "judge")]
     reasons = [v for t in trees for v in _literal_assignments(t, "reason")]
     reason = next((r for r in reversed(reasons) if isinstance(r, str)), "")
@@ -109,11 +142,80 @@ def parse_verdict(text: str) -> tuple[bool | None, str, str | None]:
     return judges[0], reason, None
 
 
+def parse_wrong(text: str) -> tuple[str, ...]:
+    """The names of a literal ``wrong = [...]`` list in an answer (empty when there is none)."""
+    for tree in reversed(_answer_trees(text) or []):
+        for value in reversed(_literal_assignments(tree, "wrong")):
+            return _names(value)
+    return ()
+
+
+def _names(value: Any) -> tuple[str, ...]:
+    """``value`` as a tuple of object names when it is a list/tuple/set of strings, else ()."""
+    if isinstance(value, (list, tuple, set, frozenset)) and all(isinstance(v, str) for v in value):
+        return tuple(dict.fromkeys(value))
+    return ()
+
+
+def _is_bool(value: Any) -> bool:
+    return isinstance(value, (bool, np.bool_))
+
+
+def _failing_line(exc: PlanError, code: str) -> str:
+    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
+    lines = code.splitlines()
+    if exc.line is None or not 1 <= exc.line <= len(lines):
+        return ""
+    return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
+
+
+# ------------------------------------------------------------------------------------------------
+# the direct structured verdict (fallback of both modes)
+# ------------------------------------------------------------------------------------------------
+def scene_listing(api: Any) -> str:
+    """One line per object: centre [x, y, z] (m) and tilt (degrees from upright)."""
+    lines = []
+    for name, (pos, rpy) in api["get_obj_pos_dict"]().items():
+        quarter = math.pi / 2
+        tilt = max(min(abs(a) % quarter, quarter - abs(a) % quarter) for a in rpy[:2])
+        lines.append(f"- {name}: centre [{pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}], "
+                     f"tilt {math.degrees(tilt):.0f} deg")
+    return "\n".join(lines)
+
+
+def direct_verdict(session: LMPSession, goal: str, mode: str, errors: tuple[str, ...] = ()) -> Report:
+    """Ask for ``judge``/``reason``/``wrong`` from the object poses alone; parse, never execute."""
+    folder = session.directory if session.directory is not None else prompts_dir()
+    try:
+        template = (folder / "reporter_direct.txt").read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"direct reporter prompt {folder / 'reporter_direct.txt'} not found") from None
+    call = session.next_call("reporter_direct", goal)
+    prompt = template.replace("<<STATE>>", scene_listing(session.api)).replace("<<GOAL>>", " ".join(goal.split()))
+    text = session.ask(call, session.messages(prompt))
+    judge, reason, problem = parse_verdict(text)
+    if problem is not None:
+        session.record(call, "error", problem)
+        errors = errors + (f"direct: {problem}",)
+        return Report(mode, None, reason, problem, "unknown", (), errors)
+    wrong = parse_wrong(text)
+    session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+    return Report(mode, judge, reason, errors[-1] if errors else None, "direct", wrong, errors)
+
+
+def _repair_request(problem: str, question: str) -> str:
+    return (f"# The checking code above failed: {problem}\n"
+            f"# Write the corrected complete checking code for the same goal. Already defined (do not "
+            f"redefine them): {', '.join(PREBOUND)}.\n"
+            "# Set judge = True or False, reason = a short explanation, wrong = [names of the objects whose "
+            "state is wrong].\n" + question + "\n")
+
+
 # ------------------------------------------------------------------------------------------------
 # text reporter
 # ------------------------------------------------------------------------------------------------
 class TextReporter:
-    """``parse_completion`` over the live scene."""
+    """``parse_completion`` over the settled scene: code, one repair, then the direct verdict."""
 
     mode = "text"
 
@@ -121,10 +223,49 @@ class TextReporter:
         return None
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
-        judge, reason = session.parse_completion(goal)
-        calls = [c for c in session.transcript if c.lmp == "parse_completion" and c.attempt == session.attempt]
-        error = calls[-1].error if calls and calls[-1].error else None
-        return Report(self.mode, judge, reason, error)
+        sentence = " ".join(goal.split())
+        sentence = sentence if sentence.endswith((".", "?", "!")) else sentence + "."
+        question = f"{session.objects_text().strip()}\n# goal: {sentence}"
+        messages = session.messages(session.prompt("parse_completion").render(question))
+        errors: tuple[str, ...] = ()
+        for source in ("code", "repair"):
+            call = session.next_call("parse_completion", goal)
+            text = session.ask(call, messages)
+            verdict, reason, wrong, problem = self._run(session, call, text, ctx, goal, question)
+            if problem is None:
+                return Report(self.mode, verdict, reason, errors[-1] if errors else None, source, wrong, errors)
+            errors += (f"{source}: {problem}",)
+            messages = messages + [{"role": "assistant", "content": text},
+                                   {"role": "user", "content": _repair_request(problem, question)}]
+        return direct_verdict(session, goal, self.mode, errors)
+
+    @staticmethod
+    def _run(session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, question: str
+             ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
+        """(verdict, reason, wrong, problem) of one answer's checking code."""
+        env = session.helper_env(question)
+        env.update(reporter_env(session.api, ctx.world.objects, goal))  # fresh: code may mutate it
+        code = ""
+        try:
+            code = extract_code(text)
+            code = session.prepare(code, env, parent=call)
+            session.record(call, "code", code)
+            ns = run_code(code, env, budget=session.lmp_budget,
+                          filename=f"<parse_completion {session.attempt}.{call.n}>")
+        except PlanError as exc:
+            problem = f"{type(exc).__name__}: {exc}{_failing_line(exc, code)}"
+            session.record(call, "error", problem)
+            return None, "", (), problem
+        judge, reason = ns.get("judge"), ns.get("reason")
+        reason = reason if isinstance(reason, str) else ""
+        if not _is_bool(judge):
+            problem = ("the code did not set 'judge'" if "judge" not in ns
+                       else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
+            session.record(call, "error", problem)
+            return None, reason, (), problem
+        wrong = _names(ns.get("wrong"))
+        session.record(call, "result", f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+        return bool(judge), reason, wrong, None
 
     def close(self) -> None:
         return None
@@ -159,7 +300,7 @@ class VLMReporter:
         """Capture the initial front RGB image (before the first attempt acts)."""
         try:
             self._initial, _ = self._render(ctx)
-        except Exception as exc:  # noqa: BLE001 - no renderer: the verdict becomes unknown
+        except Exception as exc:  # noqa: BLE001 - no renderer: the direct verdict takes over
             self._render_error = f"{type(exc).__name__}: {exc}"
         else:
             ctx.recorder.image("llm/vlm/initial_rgb", self._initial)
@@ -196,7 +337,7 @@ class VLMReporter:
         except (CapmjError, RuntimeError, OSError) as exc:
             error = f"no images: {type(exc).__name__}: {exc}"
             session.record(call, "error", error)
-            return Report(self.mode, None, "", error)
+            return direct_verdict(session, goal, self.mode, (f"code: {error}",))
         rec = session.recorder
         base = f"llm/attempt{session.attempt}/vlm_reporter/{call.n}"
         rec.image(f"{base}/final_rgb", rgb)
@@ -210,14 +351,25 @@ class VLMReporter:
             text_part("Image 2 (after):"), image_part(png_final),
             text_part("Image 3 (depth after, colour map):"), image_part(png_depth),
         ]
-        messages = [{"role": "system", "content": load_system_prompt(folder)},
-                    {"role": "user", "content": content}]
-        text = session.ask(call, messages)  # LLMError propagates: it ends the episode's attempts
-        judge, reason, problem = parse_verdict(text)
-        if problem:
+        messages: list[dict[str, Any]] = [{"role": "system", "content": load_system_prompt(folder)},
+                                          {"role": "user", "content": content}]
+        errors: tuple[str, ...] = ()
+        for source in ("code", "repair"):
+            if source == "repair":
+                call = session.next_call("vlm_reporter", goal)
+            text = session.ask(call, messages)  # LLMError propagates: it ends the episode's attempts
+            judge, reason, problem = parse_verdict(text)
+            if problem is None:
+                wrong = parse_wrong(text)
+                session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+                return Report(self.mode, judge, reason, errors[-1] if errors else None, source, wrong, errors)
             session.record(call, "error", problem)
-        session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}")
-        return Report(self.mode, judge, reason, problem)
+            errors += (f"{source}: {problem}",)
+            messages = messages + [
+                {"role": "assistant", "content": text},
+                {"role": "user", "content": f"Your answer gave no verdict: {problem}. Answer only with one ```python "
+                                            "block that sets judge = True or False and reason = a short explanation."}]
+        return direct_verdict(session, goal, self.mode, errors)
 
     def close(self) -> None:
         if self._rig is not None:

@@ -20,8 +20,8 @@ from capmj.errors import CapmjError, ConfigError
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
-LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "episode_max_tokens",
-               "episode_max_cost_usd", "price")
+LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
+               "episode_max_tokens", "episode_max_cost_usd", "price")
 EXIT_BUDGET = 3
 """Exit code of a run stopped by --max-cost-usd / --max-tokens (resumable with a higher limit)."""
 
@@ -63,6 +63,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
     g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
+    g.add_argument("--on-unknown", dest="on_unknown", default=None, choices=("replan", "stop"),
+                   help="what an unknown reporter verdict does (default: replan)")
+    g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
+                   help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
     g.add_argument("--episode-max-tokens", dest="episode_max_tokens", type=int, default=None, metavar="N",
                    help="LLM tokens per episode; an episode over it ends with failure 'budget'")
     g.add_argument("--episode-max-cost-usd", dest="episode_max_cost_usd", type=float, default=None, metavar="USD",

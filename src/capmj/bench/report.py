@@ -41,7 +41,7 @@ TASK_LETTERS: dict[str, str] = {
 }
 """The thesis's letters of the benchmark tasks (Table 5.1), shown in front of the names."""
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
@@ -102,10 +102,44 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
             out.append(f"| {name} | {lab} | {st['n']} | {st['successes']} | {100 * (st['success_rate'] or 0):.1f} % | "
                        f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
                        f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
+    out += _loop_table(rows, labels)
     out += failure_section(summary, task_label, _order) + cost_section(summary, task_label, _order)
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
     out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"
+
+
+def _count_cell(k: int, n: int) -> str:
+    return "—" if not n else f"{k}/{n} ({round(100 * k / n)} %)"
+
+
+def _loop_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
+    """The closed-loop table of LLM configurations (empty when no cell has ``loop`` statistics)."""
+    if not any((per.get(lab) or {}).get("loop") for _, per in rows for lab in labels):
+        return []
+    out = ["", "## Closed loop (LLM agent)", "",
+           "Per attempt: *verdict* = the reporter reached True/False (of the attempts it judged; a plan that "
+           "raised is not judged); *agreement* = verdicts equal to the task predicate on the same state, with "
+           "false positives (said achieved, was not) and false negatives; *identical re-plans* = attempts 2+ "
+           "whose plan equals an earlier one. See docs/llm.md.", "",
+           "| Task | Configuration | success | attempts/ep | verdict | sources code/repair/direct/unknown "
+           "| agreement | FP | FN | identical re-plans | tokens/ep |",
+           "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
+    for t, per in rows:
+        for lab in labels:
+            st = per.get(lab) or {}
+            lp = st.get("loop")
+            if not lp:
+                continue
+            name = t if t.startswith("**") else task_label(t)
+            src = lp["verdict_sources"]
+            out.append(f"| {name} | {lab} | {_count_cell(st['successes'], st['n'])} | {lp['mean_attempts']:.2f} | "
+                       f"{_count_cell(lp['verdicts'], lp['reporter_runs'])} | "
+                       f"{src['code']}/{src['repair']}/{src['direct']}/{src['unknown']} | "
+                       f"{_count_cell(lp['agree'], lp['compared'])} | {lp['false_positives']} | "
+                       f"{lp['false_negatives']} | {_count_cell(lp['identical_replans'], lp['replans'])} | "
+                       f"{lp['mean_tokens']:.0f} |")
+    return out
 
 
 def plot(summary: Mapping[str, Any], path: str | Path, title: str = "capmj benchmark") -> Path:

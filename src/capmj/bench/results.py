@@ -133,7 +133,8 @@ def wilson(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float,
 
 
 def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-    """n, successes, success rate with its 95 % Wilson interval, means and wall-time totals."""
+    """n, successes, success rate with its 95 % Wilson interval, means and wall-time totals; for
+    LLM episodes also ``loop`` (:func:`loop_stats`: verdicts, reporter accuracy, re-plans, tokens)."""
     n = len(records)
     k = sum(1 for r in records if r.get("success") is True)
     lo, hi = wilson(k, n)
@@ -146,7 +147,7 @@ def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     from capmj.bench.failures import breakdown
     from capmj.bench.spend import usage
 
-    return {
+    out = {
         "failures": breakdown(records),
         "llm_usage": usage(records),
         "n": n,
@@ -159,6 +160,71 @@ def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         "errors": sum(1 for r in records if r.get("error")),
         "wall_s_total": sum(wall),
         "wall_s_mean": sum(wall) / len(wall) if wall else None,
+    }
+    loop = loop_stats(records)
+    if loop is not None:
+        out["loop"] = loop
+    return out
+
+
+def _share(k: int, n: int) -> float | None:
+    return k / n if n else None
+
+
+def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
+    """The closed loop of LLM episodes (``record["llm"]["attempts"]``); None without any.
+
+    Reporter accuracy compares each attempt's reporter verdict with the task predicate evaluated
+    on the same state (both recorded per attempt by the LLM agent): ``agree`` when equal,
+    ``false_positives`` = verdict True but predicate False, ``false_negatives`` = verdict False
+    but predicate True; ``agreement`` = agree / compared.  ``verdict_rate`` = attempts whose
+    reporter reached True/False / attempts in which a reporter ran (a plan that raised is not
+    judged).  ``identical_replans`` counts attempts 2, 3, ... whose plan equals an earlier
+    attempt's plan (after the extra request).  Tokens are prompt + completion per episode.
+    """
+    eps = [r for r in records if isinstance((r.get("llm") or {}).get("attempts"), list)]
+    if not eps:
+        return None
+    attempts = [a for r in eps for a in r["llm"]["attempts"] if isinstance(a, Mapping)]
+    judged = [a for a in attempts if a.get("verdict_source") is not None]
+    reached = [a for a in judged if isinstance(a.get("verdict"), bool)]
+    compared = [a for a in reached if isinstance(a.get("predicate"), bool)]
+    agree = sum(a["verdict"] is a["predicate"] for a in compared)
+    fp = sum(a["verdict"] is True and a["predicate"] is False for a in compared)
+    fn = sum(a["verdict"] is False and a["predicate"] is True for a in compared)
+    sources = {src: sum(a.get("verdict_source") == src for a in judged) for src in ("code", "repair", "direct", "unknown")}
+    replans = [a for a in attempts if a.get("code_differs") is not None]
+    identical = sum(a["code_differs"] is False for a in replans)
+
+    def tokens(r: Mapping[str, Any], field: str) -> int:
+        v = r["llm"].get(field)
+        return int(v) if isinstance(v, (int, float)) else 0
+
+    prompt = [tokens(r, "prompt_tokens") for r in eps]
+    completion = [tokens(r, "completion_tokens") for r in eps]
+    n = len(eps)
+    return {
+        "episodes": n,
+        "attempts": len(attempts),
+        "mean_attempts": len(attempts) / n,
+        "reporter_runs": len(judged),
+        "verdicts": len(reached),
+        "verdict_rate": _share(len(reached), len(judged)),
+        "verdict_sources": sources,
+        "unknown_stops": sum(a.get("on_unknown") == "stop" for a in attempts),
+        "compared": len(compared),
+        "agree": agree,
+        "false_positives": fp,
+        "false_negatives": fn,
+        "agreement": _share(agree, len(compared)),
+        "replans": len(replans),
+        "identical_replans": identical,
+        "identical_replan_rate": _share(identical, len(replans)),
+        "extra_requests": sum(bool(a.get("extra_request")) for a in attempts),
+        "tokens_total": sum(prompt) + sum(completion),
+        "mean_tokens": (sum(prompt) + sum(completion)) / n,
+        "mean_prompt_tokens": sum(prompt) / n,
+        "mean_completion_tokens": sum(completion) / n,
     }
 
 
@@ -222,6 +288,7 @@ def write_json_atomic(path: str | Path, data: Any) -> None:
 
 __all__ = [
     "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
-    "config_of", "default_label", "episode_key", "load_json", "read_results", "sanitize", "stats", "summarize",
+    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "read_results", "sanitize", "stats",
+    "summarize",
     "wilson", "write_json_atomic",
 ]

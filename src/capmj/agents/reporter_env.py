@@ -1,0 +1,117 @@
+"""What the text reporter's checking code finds already defined, so a dropped line cannot break it.
+
+A real 1.5B model copying a ``parse_completion`` example often dropped the example's first line
+(``poses = get_obj_pos_dict()``) and then failed with ``NameError: poses``, or called a ``size``
+helper the example had defined inline and sent ``parse_function`` to invent it.  The reporter
+therefore runs its code in an environment that pre-binds everything its examples use, computed
+once from the settled scene it judges:
+
+``poses``          ``{name: ([x, y, z], [roll, pitch, yaw])}`` (= ``get_obj_pos_dict()``)
+``sizes``          ``{block name: edge length (m)}``
+``blocks``, ``zones``, ``bowls``   object names by kind, in scene order
+``goal_objects``   ``{'orange zone': 'fixed orange zone with obj_id 1', ...}``: every
+                   "<colour> <kind>" phrase of the goal that names exactly one object; each is
+                   also bound as a variable ``orange_zone = 'fixed orange zone with obj_id 1'``
+``size(name)``     a block's edge length (0.0 for other objects)
+``upright(name)``  roll and pitch within 0.26 rad of a multiple of pi/2
+``in_zone(obj, zone)``  centre within 0.06 m of the zone centre in x and y
+``in_bowl(obj, bowl)``  centre within 0.05 m of the bowl centre in x-y
+``on_top(upper, lower)``  centres within 0.02 m in x-y and resting: z difference = mean of the two
+                   sizes +- 0.015 m
+
+The thresholds are the ones ``prompts/parse_completion.py`` states to the model.  These are
+geometric helpers, not the task predicates: the reporter still has to decide what the goal means.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from capmj.sim.objects import BLOCK_SIZES
+
+__all__ = ["PREBOUND", "goal_objects", "reporter_env"]
+
+PREBOUND = ("poses", "sizes", "blocks", "zones", "bowls", "goal_objects", "size", "upright", "in_zone",
+            "in_bowl", "on_top")
+"""Names the reporter's code may use without defining them (listed in the repair request), besides
+the ``<colour>_<kind>`` variables of the goal's named objects."""
+
+ZONE_HALF = 0.06
+BOWL_RADIUS = 0.05
+STACK_XY = 0.02
+STACK_Z = 0.015
+TILT = 0.26
+
+
+def goal_objects(goal: str, objects: Sequence[Any]) -> dict[str, str]:
+    """``{"<colour> <kind>": name}`` for each such phrase in ``goal`` that names exactly one object."""
+    text = " ".join(goal.lower().split())
+    out: dict[str, str] = {}
+    for o in objects:
+        phrase = f"{o.color} {o.kind}"
+        if phrase in out or not re.search(rf"\b{re.escape(phrase)}s?\b", text):
+            continue
+        same = [p for p in objects if p.kind == o.kind and p.color == o.color]
+        if len(same) == 1:
+            out[phrase] = o.name
+    return out
+
+
+def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], goal: str) -> dict[str, Any]:
+    """The pre-bound names (see the module docstring) for the current scene."""
+    poses: dict[str, tuple[list[float], list[float]]] = api["get_obj_pos_dict"]()
+    kinds = {o.name: o.kind for o in objects}
+    sizes = {o.name: BLOCK_SIZES[o.size or "small"] for o in objects if o.kind == "block"}
+
+    def _pos(name: str) -> list[float]:
+        if name not in poses:
+            raise KeyError(f"unknown object {name!r}; objects: {list(poses)}")
+        return poses[name][0]
+
+    def size(name: str) -> float:
+        """Edge length (m) of a block; 0.0 for zones, bowls and other objects."""
+        _pos(name)
+        return sizes.get(name, 0.0)
+
+    def upright(name: str) -> bool:
+        """True when the object is not tilted (|roll|, |pitch| within 0.26 rad of a multiple of pi/2)."""
+        _pos(name)
+        quarter = math.pi / 2
+        return all(min(abs(a) % quarter, quarter - abs(a) % quarter) < TILT for a in poses[name][1][:2])
+
+    def in_zone(obj: str, zone: str) -> bool:
+        """True when ``obj``'s centre lies within 0.06 m of ``zone``'s centre in x and in y."""
+        (x, y, _), (zx, zy, _) = _pos(obj), _pos(zone)
+        return abs(x - zx) < ZONE_HALF and abs(y - zy) < ZONE_HALF
+
+    def in_bowl(obj: str, bowl: str) -> bool:
+        """True when ``obj``'s centre lies within 0.05 m of ``bowl``'s centre in x-y."""
+        (x, y, _), (bx, by, _) = _pos(obj), _pos(bowl)
+        return math.hypot(x - bx, y - by) < BOWL_RADIUS
+
+    def on_top(upper: str, lower: str) -> bool:
+        """True when ``upper`` rests directly on ``lower`` (aligned in x-y, touching in z)."""
+        (x1, y1, z1), (x0, y0, z0) = _pos(upper), _pos(lower)
+        gap = (size(upper) + size(lower)) / 2
+        return math.hypot(x1 - x0, y1 - y0) < STACK_XY and abs(z1 - z0 - gap) < STACK_Z
+
+    named = goal_objects(goal, objects)
+    env: dict[str, Any] = {phrase.replace(" ", "_"): name for phrase, name in named.items()
+                           if phrase.replace(" ", "_").isidentifier()}
+    env.update({
+        "poses": poses,
+        "sizes": sizes,
+        "blocks": [n for n in poses if kinds.get(n) == "block"],
+        "zones": [n for n in poses if kinds.get(n) == "zone"],
+        "bowls": [n for n in poses if kinds.get(n) == "bowl"],
+        "goal_objects": named,
+        "size": size,
+        "upright": upright,
+        "in_zone": in_zone,
+        "in_bowl": in_bowl,
+        "on_top": on_top,
+    })
+    return env
