@@ -228,7 +228,8 @@ class LLMAgent:
             return use.complete(messages, purpose=purpose)
 
         api = PlannerAPI(ctx)
-        session = LMPSession(complete=self.meter.wrap(complete),  # logged, counted, stopped by the LLM budget api=api.functions(), objects_text=api.objects_text,
+        metered = self.meter.wrap(complete)  # logged, counted, stopped by the episode's LLM budget
+        session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth)
         before = [list(c.records) for c in clients]
