@@ -219,6 +219,19 @@ def test_unknown_price_is_unknown_and_cannot_cap_cost(stub: StubLLMServer, tmp_p
     assert usage(recs)["cost_usd"] is None and usage(recs)["tokens"] == 15
 
 
+def test_run_budget_counts_the_whole_folder() -> None:
+    from capmj.bench.spend import BudgetTracker, RunBudget
+
+    ep = {"llm": {"spend": {"calls": 2, "tokens": 600, "cost_usd": 0.25}}}
+    tracker = BudgetTracker(RunBudget.resolve(None, None, {"max_tokens": 1000}), [ep])  # stored limit
+    assert not tracker.stop()
+    tracker.add(ep)
+    assert tracker.stop() and "1200 LLM tokens" in tracker.reason
+    assert not BudgetTracker(RunBudget(max_cost_usd=0.6), [ep, ep]).stop()
+    assert BudgetTracker(RunBudget(max_cost_usd=0.5), [ep, ep]).stop()
+    assert not BudgetTracker(RunBudget(), [ep] * 100).stop()
+
+
 def test_manifest_records_the_run_and_report_warns_when_a_prompt_changed(
         run_a: Path, stub: StubLLMServer, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
     from capmj.agents.prompt_files import prompts_dir

@@ -82,7 +82,9 @@ class RunBudget:
         from capmj.agents.llm_meter import price_source
 
         model = getattr(agent, "model", None)
-        if model is None or price_source(model, getattr(agent, "price", None)) == "unknown":
+        if model is None:
+            raise ConfigError("--max-cost-usd limits LLM spending; this agent makes no LLM calls")
+        if price_source(model, getattr(agent, "price", None)) == "unknown":
             raise ConfigError(f"--max-cost-usd needs a price, but the price of {model!r} is unknown; "
                               "declare one with --price IN,OUT (USD per million tokens) or use --max-tokens")
 
