@@ -68,9 +68,9 @@ def test_grid_writes_consistent_results(grid2):
         assert st["mean_primitives"] == pytest.approx(sum(r["primitives"] for r in rs) / 3)
         assert st["wall_s_total"] == pytest.approx(sum(r["wall_s"] for r in rs))
     md = (grid2 / "summary.md").read_text()
-    assert "| A stack-all-blocks-on-a-zone | 100 % [44–100] |" in md
-    assert "| H put-block-into-matching-bowl | 100 % [44–100] |" in md
-    assert "**Overall** | **100 % [61–100]**" in md
+    assert "| A stack-all-blocks-on-a-zone | 100 % [44–100] (n=3) |" in md
+    assert "| H put-block-into-matching-bowl | 100 % [44–100] (n=3) |" in md
+    assert "**Overall** | **100 % [61–100] (n=6)**" in md
     assert (grid2 / "summary.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     cfg = json.loads((grid2 / "config.json").read_text())
     assert cfg["seeds"] == [10001, 10003, 10005] and set(cfg["versions"]) >= {"capmj", "mujoco", "python"}

@@ -11,6 +11,7 @@ import time
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
 from capmj.record import NullRecorder, Recorder
 from capmj.sim.world import World
@@ -40,6 +41,9 @@ class EpisodeResult:
     diagnostics: tuple[str, ...] = ()
     llm: dict[str, Any] = field(default_factory=dict)
     rrd: str | None = None
+    final_poses: dict[str, list[float]] = field(default_factory=dict)  # name -> [x, y, z, qw, qx, qy, qz]
+    drift: dict[str, Any] = field(default_factory=dict)  # see capmj.agents.attribution.placement_drift
+    calls: list[dict[str, Any]] = field(default_factory=list)  # LLM calls (messages + answer), see llm_meter
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -104,7 +108,12 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
     llm = dict(ctx.notes.get("llm", {}))
+    try:
+        poses, drift = final_poses(world), placement_drift(world, ctx.placements)
+    except Exception:  # noqa: BLE001 - attribution facts are optional
+        poses, drift = {}, {}
     rec.text("verdict", ("SUCCESS" if success else "FAILURE") + f" (progress {progress:.2f})\n" + "\n".join(diags)
              + (f"\nerror: {error}" if error else ""))
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
-                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm)
+                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm,
+                         final_poses=poses, drift=drift, calls=list(ctx.notes.get("llm_calls", [])))

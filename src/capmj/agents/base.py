@@ -46,6 +46,7 @@ class EpisodeContext:
         self._initial = world.snapshot()
         self._attempt_steps0 = world.steps
         self.notes: dict[str, Any] = {}
+        self.placements: dict[int, tuple[Any, Any]] = {}  # obj_id -> (target, pos after), this attempt
 
     # ------------------------------------------------------------------ acting
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
@@ -57,6 +58,8 @@ class EpisodeContext:
         res = self.prims.pick_and_place(np.asarray(pick, float), np.asarray(place, float), place_yaw)
         self.primitives += 1
         self.total_primitives += 1
+        if res.ok and res.obj_id is not None:
+            self.placements[res.obj_id] = (res.place, res.final_pos)
         info = asdict(res)
         info["attempt"] = self.attempt
         self.recorder.primitive(self.total_primitives, self.world.time, info)
@@ -68,6 +71,7 @@ class EpisodeContext:
         self.prims = Primitives(self.world, self.prims.cfg)  # motion state must match the restored arm
         self.attempt += 1
         self.primitives = 0
+        self.placements = {}
         self._attempt_steps0 = self.world.steps
 
     # ------------------------------------------------------------------ judging

@@ -33,7 +33,9 @@ from pathlib import Path
 from typing import Any
 
 from capmj.agents.api import PlannerAPI
+from capmj.agents.attribution import attempt_facts
 from capmj.agents.base import EpisodeContext
+from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
@@ -101,7 +103,9 @@ class LLMAgent:
                  api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
                  max_fn_depth: int = 3, prompts_dir: str | Path | None = None, on_unknown: str = "replan",
-                 replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE) -> None:
+                 replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
+                 episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
+                 price: str | None = None) -> None:
         if on_unknown not in ON_UNKNOWN:
             raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
         try:
@@ -126,6 +130,10 @@ class LLMAgent:
                                 max_tokens=int(max_tokens), timeout_s=float(timeout_s), max_retries=int(max_retries),
                                 backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None,
                                 cache_only=bool(cache_only))
+        self.price = parse_price(price)
+        tokens, cost = check_limits(model, max_tokens=episode_max_tokens, max_cost_usd=episode_max_cost_usd,
+                                    price=self.price)
+        self.limits = {"max_tokens": tokens, "max_cost_usd": cost}
         self.reporter = reporter
         self.attempts = attempts
         self.on_unknown = on_unknown
@@ -150,6 +158,8 @@ class LLMAgent:
         client = self.client = self._client()
         replan_client = self.replan_client = self._client(self.replan_config)
         clients = (client, replan_client)
+        meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
+        ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
         attempts: list[dict[str, Any]] = []
@@ -170,6 +180,7 @@ class LLMAgent:
             for k in range(1, self.attempts + 1):
                 if k > 1:
                     ctx.reset()
+                meter.attempt = k
                 record, error, report, outcome = self._attempt(ctx, clients, transcript, k, goal, reporter,
                                                                feedback, plans)
                 plans.append(outcome.key)
@@ -179,6 +190,10 @@ class LLMAgent:
                 record["on_unknown"] = self.on_unknown if unknown else None
                 self._usage(clients, notes)
                 self._record_attempt(ctx, record)
+                if meter.exceeded is not None:
+                    notes["stopped"] = "llm budget"
+                    last_error = error or meter.exceeded
+                    break
                 if isinstance(error, LLMError):
                     notes["stopped"] = "llm error"
                     break
@@ -199,6 +214,7 @@ class LLMAgent:
             if reporter is not None:
                 reporter.close()
             self._usage(clients, notes)
+            notes["spend"] = meter.summary()
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
@@ -214,7 +230,8 @@ class LLMAgent:
             return use.complete(messages, purpose=purpose)
 
         api = PlannerAPI(ctx)
-        session = LMPSession(complete=complete, api=api.functions(), objects_text=api.objects_text,
+        metered = self.meter.wrap(complete)  # logged, counted, stopped by the episode's LLM budget
+        session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
@@ -265,6 +282,7 @@ class LLMAgent:
             record["error_kind"] = "llm" if isinstance(error, LLMError) else "plan"
             record["error_line"] = error.line if isinstance(error, PlanError) else None
             record["report"] = self._error_report(error, ctx)
+            record.update(attempt_facts(transcript, k, record["error"], api.call_log))
         if report is not None:
             record["verdict"] = report.verdict
             record["verdict_source"] = report.source

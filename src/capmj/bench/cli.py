@@ -12,12 +12,10 @@ import argparse
 import contextlib
 import json
 import os
-import platform
 import signal
 import sys
 import threading
 import time
-from importlib import metadata
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
@@ -27,7 +25,8 @@ TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
-               "timeout_s", "cache_dir", "cache_only")
+               "timeout_s", "cache_dir", "cache_only", "episode_max_tokens", "episode_max_cost_usd",
+               "price")
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
 LLM_CONCURRENCY = 4
@@ -35,6 +34,8 @@ LLM_CONCURRENCY = 4
 EXECUTORS = ("local", "ray")
 STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 """Signals that stop a run like Ctrl-C does: workers killed, finished episodes kept, resumable."""
+EXIT_BUDGET = 3
+"""Exit code of a run stopped by --max-cost-usd / --max-tokens (resumable with a higher limit)."""
 
 EPILOG = """\
 examples:
@@ -44,7 +45,9 @@ examples:
   python -m capmj.bench --out runs/smoke --resume         # run what a killed run did not finish
   python -m capmj.bench --agent llm --model gpt-4o-mini --reporter vlm --log-images   (see docs/llm.md)
   python -m capmj.bench --list                            # tasks, their plugins, tags, broken plugins
-  python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table
+  python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table, paired McNemar test
+  python -m capmj.bench replay-check runs/llm             # re-run from the LLM cache alone, compare
+  python -m capmj.bench export runs/llm --format chat-jsonl --out calls.jsonl   (see docs/export.md)
 
 results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
          DIR/rrd/<task>/<seed>-<agent>.rrd (open with: python -m capmj.replay FILE --open)
@@ -84,6 +87,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="answer only from the cache: a missing entry fails the episode, no live call")
     g.add_argument("--yes", action="store_true", help=f"start more than {CONFIRM_LLM_EPISODES} LLM episodes "
                    "on the default seeds without asking")
+    g.add_argument("--episode-max-tokens", dest="episode_max_tokens", type=int, default=None, metavar="N",
+                   help="LLM tokens per episode; an episode over it ends with failure 'budget'")
+    g.add_argument("--episode-max-cost-usd", dest="episode_max_cost_usd", type=float, default=None, metavar="USD",
+                   help="LLM cost per episode (needs a known or declared price)")
+    g.add_argument("--price", default=None, metavar="IN,OUT",
+                   help="declare the model's price in USD per million input,output tokens (local/unlisted models)")
+    b = p.add_argument_group("run budget (the whole result folder, resumed runs included; see docs/failures.md)")
+    b.add_argument("--max-cost-usd", dest="max_cost_usd", type=float, default=None, metavar="USD",
+                   help=f"stop starting episodes once the run's LLM cost reaches USD (exit {EXIT_BUDGET}; "
+                        "--resume with a higher limit continues)")
+    b.add_argument("--max-tokens", dest="max_tokens", type=int, default=None, metavar="N",
+                   help="stop starting episodes once the run's LLM tokens reach N")
     p.add_argument("--out", type=Path, default=None, metavar="DIR", help="result folder (default: runs/<timestamp>)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help=f"worker processes (default: CPU count = {os.cpu_count()}; 0 = run in this process)")
@@ -166,16 +181,6 @@ def _one_line(msg: str) -> str:
     return " ".join(str(msg).split())
 
 
-def _versions() -> dict[str, str]:
-    out = {"python": platform.python_version(), "platform": platform.platform()}
-    for dist in ("capmj", "mujoco", "rerun-sdk", "numpy", "dm-control"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = "not installed"
-    return out
-
-
 def _prepare_out(path: Path) -> Path:
     """Create the result folder and prove it is writable; ``ConfigError`` otherwise."""
     try:
@@ -254,7 +259,9 @@ def _confirm_llm_grid(args: argparse.Namespace, agent: str, n: int) -> None:
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.agents.factory import make_agent
     from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
+    from capmj.bench.manifest import run_manifest
     from capmj.bench.report import pct_cell, write_summary
+    from capmj.bench.spend import BudgetTracker, RunBudget
     from capmj.bench.results import (
         CONFIG,
         EPISODES,
@@ -299,6 +306,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     if args.attempts is not None and args.attempts < 1:
         raise ConfigError(f"--attempts must be >= 1, got {args.attempts}")
     log, images = not args.no_log, bool(args.log_images)
+    run_budget = RunBudget.resolve(args.max_cost_usd, args.max_tokens, prev_args.get("run_budget"))
     if args.resume and not (args.no_log or args.log_images) and prev_args:
         log, images = bool(prev_args.get("log", True)), bool(prev_args.get("log_images", False))
 
@@ -308,6 +316,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
     _confirm_llm_grid(args, agent_name, len(tasks) * len(seeds))
     agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
+    run_budget.check_price(agent)
+    manifest = run_manifest(agent, tasks, stored)
     _prepare_out(out)
 
     config = {
@@ -315,9 +325,11 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         "argv": list(argv),
         "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
                  "workers": workers, "concurrency": concurrency, "executor": args.executor,
-                 "max_llm_concurrency": args.max_llm_concurrency, "log": log, "log_images": images},
+                 "max_llm_concurrency": args.max_llm_concurrency, "log": log, "log_images": images,
+                 "run_budget": run_budget.as_dict()},
         "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
-        "versions": _versions(),
+        "versions": manifest["packages"],
+        "manifest": manifest,
         "started_at": (stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "resumed_at": list((stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
                                                                       if args.resume else []),
@@ -327,6 +339,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     # ---- the episodes still to run
     existing, bad = read_results(out / EPISODES)
     done = {episode_key(r) for r in existing}
+    budget = BudgetTracker(run_budget, existing)
     jobs = []
     for t in tasks:
         for s in seeds:
@@ -349,6 +362,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     counts = {"n": 0, "ok": 0}
 
     def progress(rec: dict[str, Any]) -> None:
+        budget.add(rec)
         counts["n"] += 1
         counts["ok"] += bool(rec.get("success"))
         if bar is not None:
@@ -363,7 +377,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
             stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
                                      writer=writer, progress=progress, registered=registered,
                                      concurrency=concurrency, max_llm_concurrency=args.max_llm_concurrency,
-                                     executor=args.executor, ray_address=args.ray_address)
+                                     executor=args.executor, ray_address=args.ray_address, stop=budget.stop)
         except KeyboardInterrupt as exc:
             interrupted = getattr(exc, "signum", signal.SIGINT)
             stats = None
@@ -376,7 +390,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     records, _ = read_results(out / EPISODES)
     summary = summarize(records)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": counts["n"], "workers": workers,
-                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0)}
+                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
+                      "stopped_by_budget": budget.reason}
     write_summary(out, summary, title=f"capmj benchmark results ({out.name})")
     for label, st in summary["overall"].items():
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
@@ -386,6 +401,11 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         print(f"capmj-bench: interrupted by {signal.Signals(interrupted).name}; continue with: "
               f"python -m capmj.bench --out {out} --resume", file=sys.stderr)
         return 128 + int(interrupted)
+    if budget.reason and len(records) < total:
+        print(f"capmj-bench: run budget reached: {budget.reason}; {total - len(records)} episode(s) not started. "
+              f"Continue with: python -m capmj.bench --out {out} --resume --max-cost-usd/--max-tokens <higher limit>",
+              file=sys.stderr)
+        return EXIT_BUDGET
     return 0
 
 
@@ -448,6 +468,8 @@ def report_main(argv: Sequence[str]) -> int:
         print(f"capmj-bench report: error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
     print(json.dumps(summary, indent=2, sort_keys=True) if args.json else md, end="" if not args.json else "\n")
+    for warning in summary.get("warnings") or []:
+        print(f"capmj-bench report: warning: {warning}", file=sys.stderr)
     if out is not None:
         print(f"wrote {Path(out) / 'summary.md'}, summary.json, summary.png", file=sys.stderr)
     return 0
@@ -457,6 +479,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "report":
         return report_main(argv[1:])
+    if argv and argv[0] == "replay-check":
+        from capmj.bench.replay_check import main as replay_check_main
+
+        return replay_check_main(argv[1:])
+    if argv and argv[0] == "export":
+        from capmj.bench.export import main as export_main
+
+        return export_main(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         if args.list:

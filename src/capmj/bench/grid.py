@@ -193,8 +193,9 @@ class Grid:
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
                  registered: Sequence[Any] = (), recycle_after: int | None = None, concurrency: int = 1,
-                 max_llm_concurrency: int | None = None) -> None:
+                 max_llm_concurrency: int | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
+        self.stop = stop or (lambda: False)  # checked before each new episode (run budget)
         self.workers = max(0, int(workers))
         self.concurrency = max(1, int(concurrency))
         # max_tasks_per_child counts calls, and a call is a batch
@@ -281,6 +282,8 @@ class Grid:
         signal.signal(signal.SIGINT, sigint)
         try:
             for i in range(0, len(jobs), self.concurrency):
+                if self.stop():
+                    break
                 batch = jobs[i:i + self.concurrency]
                 for job, rec in zip(batch, run_batch(batch)):
                     self._emit(job, rec)
@@ -295,6 +298,8 @@ class Grid:
         inflight: dict[Future, list[Job]] = {}
         limit = self.workers + 2
         while pending or suspects or inflight:
+            if self.stop() and not inflight:
+                break
             if self._pool is None:
                 self._pool = self._new_pool()
             broken = False
@@ -302,7 +307,7 @@ class Grid:
                 self._isolating = bool(suspects)
             source = suspects if self._isolating else pending
             cap, size = (1, 1) if self._isolating else (limit, self.concurrency)
-            while source and len(inflight) < cap:
+            while source and len(inflight) < cap and not self.stop():
                 batch = [source.popleft() for _ in range(min(size, len(source)))]
                 try:
                     inflight[self._pool.submit(run_batch, batch)] = batch
@@ -365,16 +370,21 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
                      writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
                      registered: Sequence[Any] = (), concurrency: int = 1,
                      max_llm_concurrency: int | None = None, executor: str = "local",
-                     ray_address: str | None = None) -> GridStats:
+                     ray_address: str | None = None, stop: Callable[[], bool] | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer`` (``rrd`` made relative to ``out_dir``).
 
     When episodes are logged, workers are replaced every :data:`RECYCLE_LOGGING_WORKERS` episodes:
     rerun never frees a Python ``RecordingStream`` (its threads outlive it, rerun issue #2116), so
     a worker writing one ``.rrd`` per episode would otherwise gain four idle threads per episode.
     """
+    from capmj.bench.failures import classify
+    from capmj.bench.transcripts import write_calls
+
     out_dir = Path(out_dir).resolve()
 
     def on_result(job: Job, rec: dict[str, Any]) -> None:
+        write_calls(out_dir, rec)
+        rec["failure"] = classify(rec)
         rrd = rec.get("rrd")
         if rrd:
             try:
@@ -391,11 +401,11 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
 
         grid: Grid | RayGrid = RayGrid(agent, workers=workers, on_result=on_result, registered=registered,
                                        concurrency=concurrency, max_llm_concurrency=max_llm_concurrency,
-                                       address=ray_address)
+                                       address=ray_address, stop=stop)
     else:
         grid = Grid(agent, workers=workers, on_result=on_result, registered=registered,
                     recycle_after=RECYCLE_LOGGING_WORKERS if logging else None, concurrency=concurrency,
-                    max_llm_concurrency=max_llm_concurrency)
+                    max_llm_concurrency=max_llm_concurrency, stop=stop)
     t0 = time.perf_counter()
     stats = grid.run(jobs)
     stats.wall_s = time.perf_counter() - t0

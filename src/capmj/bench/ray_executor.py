@@ -56,7 +56,7 @@ class RayGrid:
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
                  registered: Sequence[Any] = (), concurrency: int = 1, max_llm_concurrency: int | None = None,
-                 address: str | None = None) -> None:
+                 address: str | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
         self.workers = max(1, int(workers))
         self.concurrency = max(1, int(concurrency))
@@ -65,6 +65,7 @@ class RayGrid:
         # A cluster-wide semaphore would cost a round trip per request; each actor gets its share.
         self.llm_limit = None if not max_llm_concurrency else max(1, -(-max_llm_concurrency // self.workers))
         self.address = address
+        self.stop = stop or (lambda: False)  # checked before each new episode (run budget)
         self.stats = GridStats()
 
     def _emit(self, job: Job, rec: dict[str, Any]) -> None:
@@ -128,6 +129,10 @@ class RayGrid:
         suspects: deque[Job] = deque()
         inflight: dict[Any, tuple[int, Job]] = {}   # ObjectRef -> (actor index or -1 for iso, job)
         while pending or suspects or inflight:
+            if self.stop():
+                pending.clear()
+                if not inflight:
+                    break
             for i in range(len(actors)):
                 while pending and load[i] < self.concurrency:
                     job = pending.popleft()

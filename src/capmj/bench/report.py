@@ -24,6 +24,7 @@ from capmj.bench.results import (
     summarize,
     write_json_atomic,
 )
+from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
 from capmj.errors import ConfigError
 
 TASK_LETTERS: dict[str, str] = {
@@ -82,9 +83,10 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
             "| Task | " + " | ".join(head) + " |",
             "|---|" + "---:|" * len(labels)]
     for t in tasks:
-        cells = [pct_cell(summary["tasks"][t].get(lab), show_n=not uniform[lab]) for lab in labels]
+        cells = [pct_cell(summary["tasks"][t].get(lab), show_n=True) for lab in labels]
         out.append(f"| {task_label(t)} | " + " | ".join(cells) + " |")
-    out.append("| **Overall** | " + " | ".join(f"**{pct_cell(summary['overall'][lab])}**" for lab in labels) + " |")
+    out.append("| **Overall** | " + " | ".join(f"**{pct_cell(summary['overall'][lab], show_n=True)}**"
+                                              for lab in labels) + " |")
     out += ["", "## Details", "",
             "| Task | Configuration | n | successes | success | 95 % CI | mean progress | mean primitives "
             "| errors | wall total (s) | wall mean (s) |",
@@ -101,6 +103,9 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                        f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
                        f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
+    out += failure_section(summary, task_label, _order) + cost_section(summary, task_label, _order)
+    out += comparison_section(summary.get("comparisons") or [], task_label, _order)
+    out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"
 
 
@@ -241,9 +246,19 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[dict[str, Any]], dict
 
 def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tuple[dict[str, Any], str]:
     """Summary and Markdown over one or several result folders; written to ``out_dir`` when given."""
+    from capmj.bench.manifest import differences
+    from capmj.bench.stats import paired_comparison
+
     records, labels, sources = load_folders(dirs)
     summary = summarize(records, label_of=lambda r: labels[id(r)])
     summary["sources"] = sources
+    cols = list(summary["overall"])
+    summary["comparisons"] = [paired_comparison(records, lambda r: labels[id(r)], cols[0], other)
+                              for other in cols[1:]]
+    if len(dirs) > 1:
+        names = [str(d) for d in dirs]
+        summary["warnings"] = differences({n: (load_json(Path(d) / CONFIG) or {}).get("manifest")
+                                           for n, d in zip(names, dirs)})
     if out_dir is not None and len(dirs) == 1 and Path(out_dir).resolve() == Path(dirs[0]).resolve():
         previous = load_json(Path(out_dir) / SUMMARY_JSON) or {}
         if "run" in previous:  # keep the timing facts of the run that produced the folder

@@ -2,7 +2,9 @@
 
 ``episodes.jsonl`` has one JSON object per finished episode with every field of
 :class:`capmj.runner.EpisodeResult` (task, seed, agent, model, success, progress, reward,
-primitives, attempts, sim_s, wall_s, error, goal, diagnostics, llm, rrd).  Lines are appended by
+primitives, attempts, sim_s, wall_s, error, goal, diagnostics, llm, rrd, final_poses, drift), plus
+``failure`` (:mod:`capmj.bench.failures`) and ``transcript`` (the episode's LLM calls moved to
+``transcripts/``, :mod:`capmj.bench.transcripts`).  Lines are appended by
 one process only (the grid's parent) as one ``write`` of a complete line followed by ``fsync``, so
 a run killed at any moment leaves complete lines plus at most one truncated last line, which
 :func:`read_results` skips and :class:`ResultsWriter` cuts off before appending again.
@@ -144,7 +146,12 @@ def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         return sum(vals) / len(vals) if vals else None
 
     wall = [float(r["wall_s"]) for r in records if isinstance(r.get("wall_s"), (int, float))]
+    from capmj.bench.failures import breakdown
+    from capmj.bench.spend import usage
+
     out = {
+        "failures": breakdown(records),
+        "llm_usage": usage(records),
         "n": n,
         "successes": k,
         "success_rate": k / n if n else None,

@@ -312,6 +312,7 @@ class RerunRecorder:
         rr = self._rr
         self._flush_frames(final_label=self._prim)
         res = result.to_dict() if hasattr(result, "to_dict") else dict(result or {})
+        res.pop("calls", None)  # the LLM messages are logged under llm/ already (and kept in transcripts/)
         s: dict[str, Any] = {"schema": SUMMARY_SCHEMA}
         s.update({k: v for k, v in self.meta.items() if v is not None})
         s.update(jsonable(res))

@@ -1,0 +1,84 @@
+"""``python -m capmj.bench export DIR --format chat-jsonl``: LLM calls of a run as fine-tuning data.
+
+One JSON line per planner / helper LMP / reporter call that returned a completion, in the OpenAI
+chat fine-tuning format: ``messages`` = the messages sent plus the completion as the final
+``assistant`` message.  ``metadata`` says where the call came from and how its episode ended
+(task, seed, attempt, LMP, success, failure label, reporter verdict of that attempt); with
+``--messages-only`` the lines carry ``messages`` alone, as strict uploaders demand.  See
+docs/export.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any, Iterator, Sequence
+
+from capmj.bench.failures import failure_of
+from capmj.bench.results import EPISODES, read_results
+from capmj.bench.transcripts import read_calls
+from capmj.errors import ConfigError
+
+__all__ = ["FORMATS", "chat_examples", "main"]
+
+FORMATS = ("chat-jsonl",)
+
+
+def chat_examples(run_dir: str | Path, *, only_success: bool = False,
+                  messages_only: bool = False) -> Iterator[dict[str, Any]]:
+    """The fine-tuning examples of a result folder, episode by episode, call by call."""
+    run_dir = Path(run_dir)
+    if not (run_dir / EPISODES).is_file():
+        raise ConfigError(f"{run_dir} is not a result folder (no {EPISODES})")
+    records, _ = read_results(run_dir / EPISODES)
+    records.sort(key=lambda r: (str(r["task"]), int(r["seed"])))
+    for rec in records:
+        if only_success and rec.get("success") is not True:
+            continue
+        verdicts = {a.get("attempt"): a.get("verdict") for a in (rec.get("llm") or {}).get("attempts") or []}
+        try:
+            calls = read_calls(run_dir, rec)
+        except (OSError, ValueError) as exc:
+            raise ConfigError(f"transcript of {rec['task']} seed {rec['seed']} is unreadable: {exc}") from None
+        for call in calls:
+            messages = [dict(m) for m in call["messages"]] + [{"role": "assistant", "content": call["completion"]}]
+            example: dict[str, Any] = {"messages": messages}
+            if not messages_only:
+                lmp, _, n = str(call.get("purpose", "")).partition("#")
+                example["metadata"] = {
+                    "task": rec["task"], "seed": rec["seed"], "model": rec.get("model"),
+                    "attempt": call.get("attempt"), "lmp": lmp, "call": int(n) if n.isdigit() else None,
+                    "episode_success": rec.get("success"), "failure": failure_of(rec),
+                    "attempt_verdict": verdicts.get(call.get("attempt")), "cached": call.get("cached"),
+                }
+            yield example
+
+
+def main(argv: Sequence[str]) -> int:
+    p = argparse.ArgumentParser(prog="python -m capmj.bench export",
+                                description="Write every LLM call of a run as a chat transcript (OpenAI fine-tuning "
+                                            "JSONL) with its episode's verdict and failure label.")
+    p.add_argument("dir", type=Path, metavar="DIR")
+    p.add_argument("--format", default="chat-jsonl", choices=FORMATS)
+    p.add_argument("--only-success", action="store_true", help="only calls of successful episodes")
+    p.add_argument("--messages-only", action="store_true", help="lines carry 'messages' only (no metadata)")
+    p.add_argument("--out", type=Path, default=None, metavar="FILE", help="output file (default: stdout)")
+    args = p.parse_args(list(argv))
+    n = 0
+    try:
+        examples = chat_examples(args.dir, only_success=args.only_success, messages_only=args.messages_only)
+        sink = open(args.out, "w", encoding="utf-8") if args.out else sys.stdout
+        try:
+            for ex in examples:
+                sink.write(json.dumps(ex, ensure_ascii=False) + "\n")
+                n += 1
+        finally:
+            if args.out:
+                sink.close()
+    except (ConfigError, OSError) as exc:
+        print(f"capmj-bench export: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    print(f"exported {n} call(s)" + (f" to {args.out}" if args.out else ""), file=sys.stderr)
+    return 0

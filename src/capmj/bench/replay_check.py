@@ -1,0 +1,128 @@
+"""``python -m capmj.bench replay-check DIR``: re-run a finished run from the LLM cache alone.
+
+Every episode of ``DIR/episodes.jsonl`` is run again in this process with the run's own agent
+options (``config.json``), its LLM client in *cache-only* mode: a completion missing from the cache
+is an error of that episode, never a live call, so the check makes zero HTTP calls.  An episode
+passes when its final object poses match the recorded ones within ``--tol`` (default 1e-9, per
+coordinate and quaternion component), and success, progress, failure label and every attempt's
+reporter verdict are the same.  Exit 0 all passed, 1 some differ, 2 bad input.
+
+Why: a published number is only as good as one's ability to reproduce it; physics is deterministic
+and the cache holds every completion, so a replay must be *exact*.  A replay that differs points at
+an edited cache, changed code or prompts (see the run manifest), or nondeterminism in LLM code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from capmj.bench.results import CONFIG, EPISODES, load_json, read_results, sanitize
+from capmj.errors import CapmjError, ConfigError
+
+__all__ = ["compare", "main", "replay_check"]
+
+TOL = 1e-9
+
+
+def compare(old: Mapping[str, Any], new: Mapping[str, Any], tol: float = TOL) -> list[str]:
+    """Why the replayed record ``new`` differs from the recorded ``old`` ([] when it does not)."""
+    reasons: list[str] = []
+    error = str(new.get("error") or "")
+    if "cache-only" in error:
+        return [f"missing cache entry: {error}"]
+    a, b = old.get("final_poses") or {}, new.get("final_poses") or {}
+    if not a:
+        reasons.append("the recorded episode has no final poses (written by an older capmj)")
+    elif set(a) != set(b):
+        reasons.append(f"different objects: {sorted(set(a) ^ set(b))}")
+    else:
+        worst = max((abs(float(x) - float(y)), name) for name in a for x, y in zip(a[name], b[name]))
+        if worst[0] > tol:
+            reasons.append(f"final pose of {worst[1]!r} differs by {worst[0]:.3g} (> {tol:g})")
+    for key in ("success", "progress", "failure", "error"):
+        if old.get(key) != new.get(key):
+            reasons.append(f"{key}: recorded {old.get(key)!r}, replayed {new.get(key)!r}")
+    va = [x.get("verdict") for x in (old.get("llm") or {}).get("attempts") or []]
+    vb = [x.get("verdict") for x in (new.get("llm") or {}).get("attempts") or []]
+    if va != vb:
+        reasons.append(f"reporter verdicts: recorded {va}, replayed {vb}")
+    return reasons
+
+
+def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, tol: float = TOL,
+                 progress: Any = None) -> dict[str, Any]:
+    """Replay every episode of ``run_dir``; ``{"episodes", "passed", "http_calls", "mismatches"}``."""
+    from capmj.agents.factory import make_agent
+    from capmj.bench.failures import classify
+    from capmj.runner import run_episode
+    from capmj.tasks.registry import get_task
+
+    run_dir = Path(run_dir)
+    config = load_json(run_dir / CONFIG)
+    if config is None or not (run_dir / EPISODES).is_file():
+        raise ConfigError(f"{run_dir} is not a result folder (needs {CONFIG} and {EPISODES})")
+    args = config.get("args") or {}
+    agent_name = args.get("agent") or "oracle"
+    options = dict(args.get("agent_options") or {})
+    if agent_name == "llm":
+        cache = cache_dir or (config.get("manifest") or {}).get("cache_dir")
+        if not cache:
+            raise ConfigError(f"{run_dir} was run without an LLM cache (CAPMJ_LLM_CACHE); nothing to replay from. "
+                              "Give --cache DIR if the completions are cached elsewhere")
+        if not Path(cache).is_dir():
+            raise ConfigError(f"LLM cache folder {str(cache)!r} does not exist")
+        options.update(cache_dir=str(cache), cache_only=True)
+    agent = make_agent(agent_name, **options)
+    records, _ = read_results(run_dir / EPISODES)
+    records.sort(key=lambda r: (str(r["task"]), int(r["seed"])))
+    mismatches: list[dict[str, Any]] = []
+    live = 0
+    for rec in records:
+        try:
+            result = run_episode(get_task(str(rec["task"])), int(rec["seed"]), agent)
+        except CapmjError as exc:
+            mismatches.append({"task": rec["task"], "seed": rec["seed"], "reasons": [f"cannot replay: {exc}"]})
+            continue
+        new = sanitize(result.to_dict())
+        new["failure"] = classify(new)
+        llm = new.get("llm") or {}
+        live += int(llm.get("calls") or 0) - int(llm.get("cached_calls") or 0) - int(llm.get("failed_calls") or 0)
+        reasons = compare(rec, new, tol)
+        if reasons:
+            mismatches.append({"task": rec["task"], "seed": rec["seed"], "reasons": reasons})
+        if progress is not None:
+            progress(rec, reasons)
+    return {"run": str(run_dir), "episodes": len(records), "passed": len(records) - len(mismatches),
+            "http_calls": live, "tolerance": tol, "mismatches": mismatches}
+
+
+def main(argv: Sequence[str]) -> int:
+    p = argparse.ArgumentParser(prog="python -m capmj.bench replay-check",
+                                description="Re-run a finished run from the LLM cache alone (zero HTTP calls) and "
+                                            "check every episode reaches the same final poses and verdict.")
+    p.add_argument("dir", type=Path, metavar="DIR")
+    p.add_argument("--cache", type=Path, default=None, metavar="DIR",
+                   help="LLM cache folder (default: the one recorded in DIR/config.json)")
+    p.add_argument("--tol", type=float, default=TOL, help=f"pose tolerance (default {TOL:g})")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    args = p.parse_args(list(argv))
+
+    def show(rec: Mapping[str, Any], reasons: list[str]) -> None:
+        print(f"{rec['task']} seed {rec['seed']}: " + ("ok" if not reasons else "DIFFERS: " + "; ".join(reasons)),
+              file=sys.stderr)
+
+    try:
+        out = replay_check(args.dir, cache_dir=args.cache, tol=args.tol, progress=show)
+    except ConfigError as exc:
+        print(f"capmj-bench replay-check: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(out, indent=2, sort_keys=True))
+    else:
+        print(f"replay-check {out['run']}: {out['passed']}/{out['episodes']} episode(s) identical "
+              f"(tolerance {out['tolerance']:g}), {out['http_calls']} HTTP call(s)")
+    return 0 if not out["mismatches"] else 1

@@ -1,0 +1,96 @@
+"""Markdown sections of ``summary.md`` beyond the success table: why episodes failed, what the LLM
+cost, paired comparisons between configurations, and warnings about runs that differ.
+
+Every cell says its n.  Data come from ``summary.json`` (see :mod:`capmj.bench.results`,
+:mod:`capmj.bench.failures`, :mod:`capmj.bench.spend`, :mod:`capmj.bench.stats`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Mapping
+
+from capmj.bench.failures import LABELS
+from capmj.bench.spend import fmt_cost
+
+__all__ = ["comparison_section", "cost_section", "failure_section", "warnings_section"]
+
+
+def _rows(summary: Mapping[str, Any], task_label: Callable[[str], str],
+          order: Callable[[str], Any]) -> list[tuple[str, Mapping[str, Any]]]:
+    tasks = sorted(summary["tasks"], key=order)
+    return [(task_label(t), summary["tasks"][t]) for t in tasks] + [("**Overall**", summary["overall"])]
+
+
+def failure_section(summary: Mapping[str, Any], task_label: Callable[[str], str],
+                    order: Callable[[str], Any]) -> list[str]:
+    """Failed episodes per label (docs/failures.md says how each label is decided)."""
+    present = [lab for lab in LABELS if any(lab in (st.get("failures") or {})
+                                            for per in [summary["overall"]] for st in per.values())]
+    present += sorted({lab for st in summary["overall"].values() for lab in (st.get("failures") or {})} - set(present))
+    if not present:
+        return []
+    out = ["", "## Failures", "",
+           "Failed episodes by cause, as counts of n (the cell's episodes); see docs/failures.md for the rules.", "",
+           "| Task | Configuration | n | failed | " + " | ".join(present) + " |",
+           "|---|---|---:|---:|" + "---:|" * len(present)]
+    for name, per in _rows(summary, task_label, order):
+        for lab, st in per.items():
+            f = st.get("failures") or {}
+            out.append(f"| {name} | {lab} | {st['n']} | {st['n'] - st['successes']} | "
+                       + " | ".join(str(f.get(x, 0)) for x in present) + " |")
+    return out
+
+
+def cost_section(summary: Mapping[str, Any], task_label: Callable[[str], str],
+                 order: Callable[[str], Any]) -> list[str]:
+    """LLM calls, tokens and cost (nominal: cache hits at their stored cost; 'unknown' = no price)."""
+    if not any((st.get("llm_usage") or {}).get("llm_episodes") for st in summary["overall"].values()):
+        return []
+    out = ["", "## LLM usage and cost", "",
+           "Nominal usage (cache hits counted at their recorded tokens and price); cost 'unknown' when a "
+           "model has no known or declared price.", "",
+           "| Task | Configuration | n | LLM calls | tokens | tokens / episode | cost (USD) | cost / episode (USD) |",
+           "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for name, per in _rows(summary, task_label, order):
+        for lab, st in per.items():
+            u = st.get("llm_usage") or {}
+            if not u.get("llm_episodes"):
+                continue
+            mean = u.get("tokens_mean")
+            out.append(f"| {name} | {lab} | {u['llm_episodes']} | {u['calls']} | {u['tokens']} | "
+                       f"{'—' if mean is None else f'{mean:.0f}'} | {fmt_cost(u.get('cost_usd'))} | "
+                       f"{fmt_cost(u.get('cost_usd_mean'))} |")
+    return out
+
+
+def _pct(v: float | None) -> str:
+    return "—" if v is None else f"{100 * v:+.0f} pp"
+
+
+def comparison_section(comparisons: list[Mapping[str, Any]], task_label: Callable[[str], str],
+                       order: Callable[[str], Any]) -> list[str]:
+    """Paired (task, seed) comparisons with the exact McNemar test."""
+    out: list[str] = []
+    for cmp in comparisons:
+        a, b = cmp["a"], cmp["b"]
+        out += ["", f"## Paired comparison: {a} vs {b}", "",
+                f"Same (task, seed) pairs only (n = pairs; {cmp['unpaired']} unpaired episode(s) left out). "
+                f"Difference = success rate of {a} minus {b}; exact two-sided McNemar test on the discordant pairs; "
+                f"p ≥ {cmp['alpha']} is flagged *not significant*.", "",
+                f"| Task | n | {a} | {b} | difference | only {a} | only {b} | McNemar p | |",
+                "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+        rows = [(task_label(t), cmp["tasks"][t]) for t in sorted(cmp["tasks"], key=order)]
+        rows.append(("**Overall**", cmp["overall"]))
+        for name, c in rows:
+            flag = "significant" if c["significant"] else "not significant"
+            out.append(f"| {name} | {c['n']} | {c['successes_a']}/{c['n']} | {c['successes_b']}/{c['n']} | "
+                       f"{_pct(c['difference'])} | {c['only_a']} | {c['only_b']} | {c['p_value']:.4g} | {flag} |")
+    return out
+
+
+def warnings_section(warnings: list[str]) -> list[str]:
+    if not warnings:
+        return []
+    return ["", "## Warnings: the combined runs differ", "",
+            "These runs were not made under the same conditions (run manifests in config.json):", ""] + \
+           [f"- {w}" for w in warnings]
