@@ -198,6 +198,11 @@ class TabletopEnv(dm_env.Environment):
         return dm_env.truncation(reward, obs, 1.0)
 
     @property
+    def camera_rig(self) -> Any:
+        """The :class:`~capmj.sim.cameras.CameraRig` of the current episode (None before rendering)."""
+        return self._rig
+
+    @property
     def ended(self) -> bool:
         """Whether the current episode is over (the next ``step`` starts a new one)."""
         return self._done
