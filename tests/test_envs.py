@@ -49,12 +49,13 @@ def test_gymnasium_env_checker_passes() -> None:
 
     from capmj.envs.gym_env import env_id
 
-    env = gymnasium.make(env_id("stack-all-blocks-on-a-zone"),
+    env = gymnasium.make(env_id("stack-all-blocks-on-a-zone"), render_mode="rgb_array",
                          config=EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False))
     check_env(env.unwrapped, skip_render_check=True)
     obs, info = env.reset(seed=7)
     assert isinstance(obs["goal"], str) and obs["goal"] in env.observation_space["goal"]
     assert info["seed"] == 7 and obs["color"].shape == (1, 24, 32, 3)
+    assert np.array_equal(env.render(), obs["color"][0])
     env.close()
 
 
@@ -89,7 +90,8 @@ def test_oracle_through_env_ends_in_the_bench_final_state() -> None:
 
 
 def test_same_seed_same_episode_and_seed_sequence() -> None:
-    cfg = EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False, segmentation=True, max_steps=2)
+    cfg = EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False, segmentation=True, heightmap=True,
+                    max_steps=2)
     runs = []
     for _ in range(2):
         env = TabletopEnv("stack-all-blocks-on-a-zone", seed=11, config=cfg, seed_stride=2)
@@ -110,8 +112,12 @@ def test_same_seed_same_episode_and_seed_sequence() -> None:
     assert len(a) == len(b) >= 2
     for x, y in zip(a, b):
         np.testing.assert_equal(x, y)
-    assert set(a[0]) == {"color", "depth", "segmentation", "goal", "joint_pos", "tip_pose", "suction"}
+    assert set(a[0]) == {"color", "depth", "segmentation", "heightmap", "colormap", "goal", "joint_pos", "tip_pose",
+                         "suction"}
     assert a[0]["segmentation"].dtype == np.int32 and a[0]["segmentation"].max() > 0
+    row, col = int((block[1] + 0.5) / 0.003125), int((block[0] - 0.25) / 0.003125)
+    assert a[0]["heightmap"].shape == (320, 160)
+    assert a[0]["heightmap"][row, col] == pytest.approx(2 * block[2], abs=0.005)  # the block's top
 
 
 def test_bad_actions_are_named() -> None:

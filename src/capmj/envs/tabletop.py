@@ -248,7 +248,8 @@ class TabletopEnv(dm_env.Environment):
         """The env action for a primitive call ``(pick, place, place_yaw)`` as agents make it.
 
         The pick yaw is the yaw of the movable object nearest the pick point (Ravens' ``pose0``);
-        ``place_yaw`` None keeps the object's orientation (place yaw = pick yaw).
+        ``place_yaw`` None keeps the object's orientation (place yaw = pick yaw).  Values are
+        clipped to the action bounds (an object knocked off the workspace is picked at its edge).
         """
         w = self.world
         if w is None:
