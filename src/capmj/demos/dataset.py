@@ -151,9 +151,8 @@ def load(path: Path | str, *, images: bool = True) -> Iterator[DemoStep]:
                            pick, place, float(rewards[t]), str(infos[t]["lang_goal"]), infos[t])
 
 
-def write_episode(directory: Path, name: str, record: Mapping[str, Any]) -> int:
-    """Write one episode's fields as ``<field>/<name>`` (atomically, action last); returns bytes."""
-    total = 0
+def write_episode(directory: Path, name: str, record: Mapping[str, Any]) -> None:
+    """Write one episode's fields as ``<field>/<name>`` (each atomically, action last)."""
     for field in FIELDS:
         (directory / field).mkdir(parents=True, exist_ok=True)
         target = directory / field / name
@@ -161,8 +160,6 @@ def write_episode(directory: Path, name: str, record: Mapping[str, Any]) -> int:
         with open(tmp, "wb") as fh:
             pickle.dump(record[field], fh, protocol=PICKLE_PROTOCOL)
         os.replace(tmp, target)
-        total += target.stat().st_size
-    return total
 
 
 def resume_point(directory: Path) -> tuple[int, int | None]:

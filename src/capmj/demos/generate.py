@@ -1,8 +1,8 @@
 """Generate oracle demonstrations: the bench oracle driven through :class:`TabletopEnv`.
 
 Workers are processes on the ``spawn`` context (MuJoCo/EGL do not survive ``fork`` after GL
-initialisation), as in the bench.  A worker records one seed into ``.partial/<seed>/`` and the
-parent moves finished episodes into place *in seed order*, so episode numbers, file names and
+initialisation), as in the bench.  A worker writes one seed's files into ``.partial/<seed>/`` and
+the parent renames finished episodes into place *in seed order*, so episode numbers, file names and
 bytes do not depend on the number of workers or on scheduling.  A killed run loses only episodes
 in flight; running again continues after the last seed tried (Ravens' ``max_seed`` rule).
 """
@@ -10,6 +10,7 @@ in flight; running again continues after the last seed tried (Ravens' ``max_seed
 from __future__ import annotations
 
 import json
+import os
 import pickle
 import shutil
 import time
@@ -22,12 +23,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from capmj.demos.dataset import (PICKLE_PROTOCOL, camera_configs, dataset_dir, ravens_action, resume_point,
-                                 split_seeds, write_episode)
+from capmj.demos.dataset import (FIELDS, PICKLE_PROTOCOL, camera_configs, dataset_dir, ravens_action,
+                                 resume_point, split_seeds, write_episode)
 from capmj.envs.oracle import run_oracle
 from capmj.envs.tabletop import EnvConfig, TabletopEnv
 
 MP_CONTEXT = "spawn"
+PARTIAL_NAME = "episode.pkl"
 
 
 @dataclass(frozen=True)
@@ -115,11 +117,13 @@ def _job(task: str, seed: int, config: EnvConfig, partial: str) -> EpisodeOutcom
         outcome, record = record_episode(task, seed, config)
     except Exception as exc:  # noqa: BLE001 - one seed's crash must not end the run
         return EpisodeOutcome(task, seed, False, 0, f"{type(exc).__name__}: {exc}", 0.0)
-    if outcome.success:
+    if outcome.success:  # written in final form once; the parent only renames
         target = Path(partial) / str(seed)
-        target.mkdir(parents=True, exist_ok=True)
-        with open(target / "record.pkl", "wb") as fh:
-            pickle.dump(record, fh, protocol=PICKLE_PROTOCOL)
+        cams = record.pop("cameras", None)
+        write_episode(target, PARTIAL_NAME, record)
+        if cams is not None:
+            with open(target / "cameras.pkl", "wb") as fh:
+                pickle.dump(cams, fh, protocol=PICKLE_PROTOCOL)
     return outcome
 
 
@@ -170,17 +174,17 @@ def _store(directory: Path, partial: Path, outcome: EpisodeOutcome, stats: Split
         with open(directory / "skipped.jsonl", "a") as fh:
             fh.write(json.dumps({"seed": outcome.seed, "error": outcome.error}) + "\n")
         return
-    src = partial / str(outcome.seed) / "record.pkl"
-    with open(src, "rb") as fh:
-        record = pickle.load(fh)
-    cams = record.pop("cameras", None)
-    if cams is not None and not (directory / "cameras.pkl").exists():
-        with open(directory / "cameras.pkl", "wb") as fh:
-            pickle.dump(cams, fh, protocol=PICKLE_PROTOCOL)
-    stats.bytes += write_episode(directory, f"{stats.saved:06d}-{outcome.seed}.pkl", record)
+    src = partial / str(outcome.seed)
+    if (src / "cameras.pkl").exists() and not (directory / "cameras.pkl").exists():
+        os.replace(src / "cameras.pkl", directory / "cameras.pkl")
+    name = f"{stats.saved:06d}-{outcome.seed}.pkl"
+    for field_name in FIELDS:  # action/ last: it is the index the loaders scan
+        (directory / field_name).mkdir(exist_ok=True)
+        os.replace(src / field_name / PARTIAL_NAME, directory / field_name / name)
+        stats.bytes += (directory / field_name / name).stat().st_size
     stats.steps += outcome.steps
     stats.saved += 1
-    shutil.rmtree(src.parent, ignore_errors=True)
+    shutil.rmtree(src, ignore_errors=True)
 
 
 def make_pool(workers: int) -> ProcessPoolExecutor | None:
