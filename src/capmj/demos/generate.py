@@ -27,6 +27,7 @@ from capmj.demos.dataset import (FIELDS, PICKLE_PROTOCOL, camera_configs, datase
                                  resume_point, split_seeds, write_episode)
 from capmj.envs.oracle import run_oracle
 from capmj.envs.tabletop import EnvConfig, TabletopEnv
+from capmj.tasks.protocol import Task
 
 MP_CONTEXT = "spawn"
 PARTIAL_NAME = "episode.pkl"
@@ -84,7 +85,7 @@ def _info(env: TabletopEnv) -> dict[str, Any]:
             "status": None if res is None else res.status, "poses": poses}
 
 
-def record_episode(task: str, seed: int, config: EnvConfig) -> tuple[EpisodeOutcome, dict[str, Any]]:
+def record_episode(task: Task | str, seed: int, config: EnvConfig) -> tuple[EpisodeOutcome, dict[str, Any]]:
     """Run the oracle on (task, seed) through the env; the Ravens fields of the episode."""
     t0 = time.perf_counter()
     env = TabletopEnv(task, seed=seed, config=config)
@@ -105,18 +106,18 @@ def record_episode(task: str, seed: int, config: EnvConfig) -> tuple[EpisodeOutc
                   "action": actions, "reward": rewards, "info": infos}
         if env.camera_rig is not None:
             record["cameras"] = camera_configs(env.camera_rig, config.cameras)
-        out = EpisodeOutcome(task, seed, error is None, len(actions) - 1, error, time.perf_counter() - t0)
+        out = EpisodeOutcome(env.task.name, seed, error is None, len(actions) - 1, error, time.perf_counter() - t0)
         return out, record
     finally:
         env.close()
 
 
-def _job(task: str, seed: int, config: EnvConfig, partial: str) -> EpisodeOutcome:
+def _job(task: Task | str, seed: int, config: EnvConfig, partial: str) -> EpisodeOutcome:
     """Worker entry: record one seed into ``partial/<seed>/`` (a failure becomes an outcome)."""
     try:
         outcome, record = record_episode(task, seed, config)
     except Exception as exc:  # noqa: BLE001 - one seed's crash must not end the run
-        return EpisodeOutcome(task, seed, False, 0, f"{type(exc).__name__}: {exc}", 0.0)
+        return EpisodeOutcome(getattr(task, "name", str(task)), seed, False, 0, f"{type(exc).__name__}: {exc}", 0.0)
     if outcome.success:  # written in final form once; the parent only renames
         target = Path(partial) / str(seed)
         cams = record.pop("cameras", None)
@@ -127,16 +128,21 @@ def _job(task: str, seed: int, config: EnvConfig, partial: str) -> EpisodeOutcom
     return outcome
 
 
-def generate_split(task: str, split: str, n: int, out: Path | str, *, config: EnvConfig,
+def generate_split(task: Task | str, split: str, n: int, out: Path | str, *, config: EnvConfig,
                    workers: int = 1, progress: Callable[[int], None] | None = None,
                    pool: ProcessPoolExecutor | None = None) -> SplitStats:
-    """Save ``n`` successful oracle episodes of ``task`` for ``split`` under ``out`` (resuming)."""
-    directory = dataset_dir(out, task, split)
+    """Save ``n`` successful oracle episodes of ``task`` for ``split`` under ``out`` (resuming).
+
+    ``task`` is a name (workers find it through the entry points) or a task object (pickled to the
+    workers: how a task added with ``registry.register`` reaches them).
+    """
+    name = task if isinstance(task, str) else task.name
+    directory = dataset_dir(out, name, split)
     directory.mkdir(parents=True, exist_ok=True)
     partial = directory / ".partial"
     shutil.rmtree(partial, ignore_errors=True)
     saved, last_seed = resume_point(directory)
-    stats = SplitStats(task, split, str(directory), saved=saved, resumed_from=saved)
+    stats = SplitStats(name, split, str(directory), saved=saved, resumed_from=saved)
     t0 = time.perf_counter()
     seeds = split_seeds(split, last_seed)
     window: deque[tuple[int, Future[EpisodeOutcome] | EpisodeOutcome]] = deque()
