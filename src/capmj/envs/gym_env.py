@@ -62,7 +62,7 @@ def to_space(spec: specs.Array) -> spaces.Space:
 class TabletopGymEnv(gym.Env):
     """A Gymnasium ``Env`` over :class:`TabletopEnv`; ``env.dm_env`` is the wrapped environment."""
 
-    metadata = {"render_modes": ["rgb_array"]}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}  # one frame per pick-and-place
 
     def __init__(self, task: Task | str, config: EnvConfig | None = None, seed: int = 0,
                  render_mode: str | None = None) -> None:
