@@ -1,0 +1,5 @@
+import sys
+
+from capmj.demos.cli import main
+
+sys.exit(main())

@@ -1,0 +1,130 @@
+"""The learning-agent env: dm_env's own conformance suite, Gymnasium's checker, the bench oracle
+driven through the env ends in the bench's exact final state, and a seed fixes the episode.
+
+Images are tiny here (rendering is slow on llvmpipe); the full-size path is the same code."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dm_env
+import numpy as np
+import pytest
+from absl.testing import absltest
+from dm_env import test_utils
+
+from capmj.agents.oracle import OracleAgent
+from capmj.envs import EnvConfig, TabletopEnv
+from capmj.envs.oracle import run_oracle
+from capmj.envs.tabletop import primitive_args
+from capmj.errors import ConfigError
+from capmj.record import NullRecorder
+from capmj.runner import run_episode
+
+SMALL = EnvConfig(width=32, height=24, robot_meshes=False, max_steps=3)
+
+
+class _Conformance(test_utils.EnvironmentTestMixin):
+    TASK = ""
+
+    def make_object_under_test(self) -> TabletopEnv:
+        return TabletopEnv(self.TASK, seed=10001, config=SMALL)
+
+    def make_action_sequence(self):  # noqa: ANN201 - short: each step is a real pick-and-place
+        for _ in range(3):
+            yield self.make_action()
+
+
+class ConformanceStackAll(_Conformance, absltest.TestCase):
+    TASK = "stack-all-blocks-on-a-zone"
+
+
+class ConformanceMatchingBowl(_Conformance, absltest.TestCase):
+    TASK = "put-block-into-matching-bowl"
+
+
+def test_gymnasium_env_checker_passes() -> None:
+    gymnasium = pytest.importorskip("gymnasium")
+    from gymnasium.utils.env_checker import check_env
+
+    from capmj.envs.gym_env import env_id
+
+    env = gymnasium.make(env_id("stack-all-blocks-on-a-zone"), render_mode="rgb_array",
+                         config=EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False))
+    check_env(env.unwrapped, skip_render_check=True)
+    obs, info = env.reset(seed=7)
+    assert isinstance(obs["goal"], str) and obs["goal"] in env.observation_space["goal"]
+    assert info["seed"] == 7 and obs["color"].shape == (1, 24, 32, 3)
+    assert np.array_equal(env.render(), obs["color"][0])
+    env.close()
+
+
+class _KeepWorld:
+    """A recorder that keeps the bench's world (the runner attaches only non-null recorders)."""
+
+    world: Any = None
+
+    def attach(self, world: Any) -> None:
+        self.world = world
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(NullRecorder(), name)
+
+
+def test_oracle_through_env_ends_in_the_bench_final_state() -> None:
+    task, seed = "stack-all-blocks-on-a-zone", 10003
+    env = TabletopEnv(task, seed=seed, config=EnvConfig(cameras=()))
+    first = env.reset()
+    steps: list[dm_env.TimeStep] = []
+    error = run_oracle(env, lambda action, ts: steps.append(ts))
+    assert error is None and env.success
+    assert [ts.step_type for ts in steps] == [dm_env.StepType.MID] * (len(steps) - 1) + [dm_env.StepType.LAST]
+    assert steps[-1].discount == 0.0 and all(ts.discount == 1.0 for ts in steps[:-1])
+    assert sum(ts.reward for ts in steps) == pytest.approx(env.progress - env.initial_progress)
+    assert str(first.observation["goal"]) == env.scene.goal
+
+    rec = _KeepWorld()
+    bench = run_episode(env.task, seed, OracleAgent(), recorder=rec)
+    assert bench.success and bench.primitives == len(steps)
+    assert np.array_equal(rec.world.snapshot().physics, env.world.snapshot().physics)
+
+
+def test_same_seed_same_episode_and_seed_sequence() -> None:
+    cfg = EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False, segmentation=True, heightmap=True,
+                    max_steps=2)
+    runs = []
+    for _ in range(2):
+        env = TabletopEnv("stack-all-blocks-on-a-zone", seed=11, config=cfg, seed_stride=2)
+        rng = np.random.default_rng(0)
+        spec = env.action_spec()
+        ts = env.reset()
+        trace = [ts.observation]
+        block = env.world.pose(env.world.movable_ids[0]).pos
+        while not ts.last():  # a random place for the first block: a real move, then random
+            action = {k: rng.uniform(s.minimum, s.maximum) for k, s in spec.items()}
+            action["pick"][:3] = block
+            ts = env.step(action)
+            trace.append((ts.observation, ts.reward, ts.discount, env.last_result))
+        runs.append(trace)
+        assert env.reset().observation["goal"] is not None and env.seed == 13
+        env.close()
+    a, b = runs
+    assert len(a) == len(b) >= 2
+    for x, y in zip(a, b):
+        np.testing.assert_equal(x, y)
+    assert set(a[0]) == {"color", "depth", "segmentation", "heightmap", "colormap", "goal", "joint_pos", "tip_pose",
+                         "suction"}
+    assert a[0]["segmentation"].dtype == np.int32 and a[0]["segmentation"].max() > 0
+    row, col = int((block[1] + 0.5) / 0.003125), int((block[0] - 0.25) / 0.003125)
+    assert a[0]["heightmap"].shape == (320, 160)
+    assert a[0]["heightmap"][row, col] == pytest.approx(2 * block[2], abs=0.005)  # the block's top
+
+
+def test_bad_actions_are_named() -> None:
+    with pytest.raises(ConfigError, match="'pick' and 'place'"):
+        primitive_args({"pick": np.zeros(4)})
+    with pytest.raises(ConfigError, match="4 finite floats"):
+        primitive_args({"pick": np.zeros(3), "place": np.zeros(4)})
+    pick, place, yaw = primitive_args({"pick": [0.5, 0, 0, 0.3], "place": [0.6, 0.1, 0.02, 0.3]})
+    assert yaw is None and place.tolist() == [0.6, 0.1, 0.02]
+    assert primitive_args({"pick": [0.5, 0, 0, 0.3], "place": [0.6, 0.1, 0.02, 1.0]})[2] == 1.0
