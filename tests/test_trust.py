@@ -170,7 +170,8 @@ def stub() -> Iterator[StubLLMServer]:
 
 def bench(stub: StubLLMServer, out: Path, *extra: str) -> int:
     return main(["--agent", "llm", "--model", "openai/stub", "--api-base", stub.base_url, "--tasks", TASK,
-                 "--workers", "0", "--no-log", "--no-progress", "--out", str(out), *extra])
+                 "--workers", "0", "--concurrency", "1",  # the run budget is checked between batches
+                 "--no-log", "--no-progress", "--out", str(out), *extra])
 
 
 @pytest.fixture(scope="module")

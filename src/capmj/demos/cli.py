@@ -15,8 +15,7 @@ from capmj.demos.dataset import SPLIT_FIRST_SEED
 from capmj.demos.generate import generate_split, make_pool
 from capmj.envs.tabletop import EnvConfig
 from capmj.errors import CapmjError
-from capmj.sim.cameras import VIEW_CAMERAS
-from capmj.sim.scene import IMAGE_H, IMAGE_W
+from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
 
 
 def build_parser() -> argparse.ArgumentParser:

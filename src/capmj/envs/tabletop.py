@@ -37,13 +37,15 @@ from capmj.agents.base import Budget, EpisodeContext
 from capmj.errors import AgentError, BudgetExceeded, ConfigError
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.robot import ARM_JOINTS
-from capmj.sim.scene import HEIGHTMAP_PIXEL, IMAGE_H, IMAGE_W, WORKSPACE
+from capmj.sim.bounds import WORKSPACE
+from capmj.sim.cameras import IMAGE_H, IMAGE_W
+from capmj.sim.scene import HEIGHTMAP_PIXEL
 from capmj.sim.world import World
 from capmj.tasks.protocol import Scene, Task, Verdict, make_scene
 
 POSE_FIELDS = ("x", "y", "z", "yaw")
-ACTION_LOW = np.array([WORKSPACE[0, 0], WORKSPACE[1, 0], WORKSPACE[2, 0], -math.pi])
-ACTION_HIGH = np.array([WORKSPACE[0, 1], WORKSPACE[1, 1], WORKSPACE[2, 1], math.pi])
+ACTION_LOW = np.array([WORKSPACE.xmin, WORKSPACE.ymin, WORKSPACE.zmin, -math.pi])
+ACTION_HIGH = np.array([WORKSPACE.xmax, WORKSPACE.ymax, WORKSPACE.zmax, math.pi])
 FAR_DEPTH = 5.0
 """Depth of pixels that see nothing (the scene's far plane, metres)."""
 
@@ -130,8 +132,8 @@ class TabletopEnv(dm_env.Environment):
         if c.segmentation:
             out["segmentation"] = specs.Array((n, h, w), np.int32, "segmentation")
         if c.heightmap:
-            rows = int(round((WORKSPACE[1, 1] - WORKSPACE[1, 0]) / HEIGHTMAP_PIXEL))
-            cols = int(round((WORKSPACE[0, 1] - WORKSPACE[0, 0]) / HEIGHTMAP_PIXEL))
+            rows = int(round((WORKSPACE.ymax - WORKSPACE.ymin) / HEIGHTMAP_PIXEL))
+            cols = int(round((WORKSPACE.xmax - WORKSPACE.xmin) / HEIGHTMAP_PIXEL))
             out["heightmap"] = specs.BoundedArray((rows, cols), np.float32, 0.0, FAR_DEPTH, "heightmap")
             out["colormap"] = specs.Array((rows, cols, 3), np.uint8, "colormap")
         out["goal"] = specs.StringArray((), name="goal")

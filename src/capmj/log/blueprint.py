@@ -33,9 +33,9 @@ SAY_LOG = f"{TEXT}/planner/say"
 def eye_point() -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """The 3D view's eye and look-at point: the front camera's line of sight, pulled back so the
     whole arm fits."""
-    from capmj.sim.scene import CAMERA_POSES
+    from capmj.sim.scene import camera_view
 
-    (cx, cy, cz), (tx, ty, tz) = CAMERA_POSES["front"]
+    (cx, cy, cz), (tx, ty, tz) = camera_view("front")
     k, lift = 1.25, 0.1  # a little farther back, aimed a little higher: table and arm both in view
     return (tx + k * (cx - tx), ty + k * (cy - ty), tz + k * (cz - tz) + lift), (tx - 0.05, ty, tz + lift)
 

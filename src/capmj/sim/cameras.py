@@ -50,6 +50,8 @@ from capmj.sim.bounds import WORKSPACE
 from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
+IMAGE_W, IMAGE_H = 640, 480
+"""Default image size of the view cameras (RealSense-D415-like, as in Ravens)."""
 """The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal)."""
 DEPTH_BACKGROUND = 4.99
 """Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
@@ -171,7 +173,7 @@ class CameraRig:
     """
 
     def __init__(self, world_or_model: Any, *, data: mujoco.MjData | None = None,
-                 width: int = 640, height: int = 480, robot_meshes: bool = True) -> None:
+                 width: int = IMAGE_W, height: int = IMAGE_H, robot_meshes: bool = True) -> None:
         if isinstance(world_or_model, mujoco.MjModel):
             self.model = world_or_model
             if data is None:

@@ -29,7 +29,20 @@ HEIGHTMAP_CAMERA = "top"
 """The orthographic top-down camera of ``mjcf/table.xml`` (spans the workspace's width)."""
 HEIGHTMAP_PIXEL = 0.003125
 
-__all__ = ["HEIGHTMAP_CAMERA", "HEIGHTMAP_PIXEL", "CompiledScene", "compile_scene"]
+__all__ = ["HEIGHTMAP_CAMERA", "HEIGHTMAP_PIXEL", "CompiledScene", "camera_view", "compile_scene"]
+
+
+def camera_view(name: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """(position, look-at point on the table plane z = 0) of a perspective camera of
+    ``mjcf/table.xml``: what a viewer needs to look at the scene like that camera does."""
+    cam = load("table.xml").compile().camera(name)
+    pos = cam.pos.copy()
+    forward = -cam.mat0.reshape(3, 3)[:, 2]  # MuJoCo cameras look along their -z axis
+    if forward[2] >= 0:
+        raise SimError(f"camera {name!r} does not look down at the table")
+    t = -pos[2] / forward[2]
+    target = pos + t * forward
+    return (float(pos[0]), float(pos[1]), float(pos[2])), (float(target[0]), float(target[1]), float(target[2]))
 
 
 @dataclass(frozen=True)
