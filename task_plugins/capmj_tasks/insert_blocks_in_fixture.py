@@ -46,9 +46,9 @@ class InsertBlocksInFixture(BenchTask):
         The goal text is fixed (see ``GOAL``): each L-shaped fixture holds three blocks of size a
         at (0,0,0), (a,0,0), (0,a,0) of its local frame (origin = the reported fixture position,
         x along the long wall); fill all fixtures so each holds three differently coloured
-        blocks.  2–4 fixed fixtures of one colour and exactly three small blocks per fixture,
-        coloured so a valid fill exists but a careless one may not (a colour can repeat up to
-        once per fixture).
+        blocks.  2–4 fixed fixtures of one colour and exactly three small blocks per fixture;
+        no colour has more blocks than there are fixtures (so a valid fill exists), but colours
+        repeat, so a careless fill can put two blocks of one colour into a fixture.
     Randomizations:
         Number of fixtures (2–4), their positions and yaws, the number of block colours (3 …),
         how many blocks each colour has (1 … number of fixtures), the colours, spawn order, all
