@@ -11,8 +11,8 @@ from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Bounds, Spawner, pick_colors
 
-from capmj_tasks.common import BenchTask, shuffled, verdict
-from capmj_tasks.structures import BLOCK, GENERATED, RING_GAP, Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
+from capmj_tasks.common import GENERATED, BenchTask, shuffled, verdict
+from capmj_tasks.structures import BLOCK, RING_GAP, Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
 
 ZONE_SCALE = 3.0
 MAX_ZONE_YAW = 0.15

@@ -8,8 +8,8 @@ from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
 
-from capmj_tasks.common import BenchTask, verdict
-from capmj_tasks.structures import GENERATED, Judgement, check_layers, layer_goal
+from capmj_tasks.common import GENERATED, BenchTask, verdict
+from capmj_tasks.structures import Judgement, check_layers, layer_goal
 
 PITCH = 0.045
 """Neighbour pitch (m) of the oracle's layers: the middle of the allowed 0.04–0.05 m."""

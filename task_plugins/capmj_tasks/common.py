@@ -14,6 +14,8 @@ from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
 
 BENCHMARK = frozenset({"benchmark"})
+GENERATED = frozenset({"generated"})
+"""Tag of the generated tasks 1–10 (thesis Table 5.3): unseen by the planner's few-shot prompt."""
 
 
 def label(spec: ObjectSpec) -> str:
@@ -168,6 +170,6 @@ class SelectedStackTask(BenchTask):
 
 
 __all__ = [
-    "BENCHMARK", "BenchTask", "SelectedStackTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
+    "BENCHMARK", "BenchTask", "GENERATED", "SelectedStackTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
     "solved_state", "stack_goals", "stack_targets", "start_positions", "verdict",
 ]

@@ -12,8 +12,8 @@ from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
 
-from capmj_tasks.common import BenchTask, label, shuffled, verdict
-from capmj_tasks.structures import GENERATED, Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
+from capmj_tasks.common import GENERATED, BenchTask, label, shuffled, verdict
+from capmj_tasks.structures import Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
 
 MIN_RADIUS = BLOCK_SIZES["small"]
 """A circle must have a radius of at least one block size (m)."""

@@ -21,7 +21,6 @@ from capmj.tasks.protocol import OracleGoal, Scene, Target
 from capmj_tasks.common import label
 
 BLOCK = BLOCK_SIZES["small"]
-GENERATED = frozenset({"generated"})
 RING_GAP = 0.01
 """Free distance (m) the oracle leaves between the faces of two neighbours on a ring."""
 
@@ -181,6 +180,6 @@ def check_ring_blocks(state: SceneState, ids: Sequence[int], zone_id: int | None
 
 
 __all__ = [
-    "BLOCK", "GENERATED", "Judgement", "RING_GAP", "check_layers", "check_ring_blocks", "colour_goal", "grid_points",
+    "BLOCK", "Judgement", "RING_GAP", "check_layers", "check_ring_blocks", "colour_goal", "grid_points",
     "layer_goal", "level_of", "ring_radius", "ring_targets",
 ]
