@@ -23,6 +23,8 @@ from capmj_tasks.common import label
 BLOCK = BLOCK_SIZES["small"]
 RING_GAP = 0.01
 """Free distance (m) the oracle leaves between the faces of two neighbours on a ring."""
+ABOVE_TOL = 0.015
+"""A cube's upper block is "above" a lower one when their xy centres are this close (m)."""
 
 
 # --------------------------------------------------------------------------------------- targets
@@ -152,10 +154,10 @@ def check_layers(state: SceneState, ids: Sequence[int], zone_id: int, sides: Seq
                 continue
             below = P.supporters(state, i, layers[k - 1])
             if stacked:
-                near = [b for b in below if math.hypot(*(state.pos(i)[:2] - state.pos(b)[:2])) <= P.Z_TOL]
+                near = [b for b in below if math.hypot(*(state.pos(i)[:2] - state.pos(b)[:2])) <= ABOVE_TOL]
                 j.check(len(near) == 1 and len(below) == 1,
                         f"{label(state.spec(i))} on layer {k + 1} is not right above one block of layer {k} "
-                        f"(within {P.Z_TOL} m in xy, resting on it)")
+                        f"(within {ABOVE_TOL} m in xy, resting on it)")
             else:
                 j.check(len(below) == 4, f"{label(state.spec(i))} on layer {k + 1} rests on {len(below)} "
                         f"block(s) of layer {k}, needs 4")
@@ -180,6 +182,6 @@ def check_ring_blocks(state: SceneState, ids: Sequence[int], zone_id: int | None
 
 
 __all__ = [
-    "BLOCK", "Judgement", "RING_GAP", "check_layers", "check_ring_blocks", "colour_goal", "grid_points",
+    "ABOVE_TOL", "BLOCK", "Judgement", "RING_GAP", "check_layers", "check_ring_blocks", "colour_goal", "grid_points",
     "layer_goal", "level_of", "ring_radius", "ring_targets",
 ]
