@@ -33,6 +33,10 @@ BUILTIN = {
     "move-blocks-between-absolute-positions", "move-blocks-between-absolute-positions-by-size",
     "put-block-into-matching-bowl", "put-block-into-mismatching-bowl", "stack-blocks-with-alternate-color",
 }
+"""The ten benchmark tasks A–J (tag ``benchmark``)."""
+CAPMJ_TASKS = {i.name for i in registry.list_tasks() if i.distribution == "capmj"}
+"""Every task capmj itself declares: A–J and the generated tasks (tag ``generated``)."""
+CAPMJ_GENERATED = sorted(CAPMJ_TASKS - BUILTIN)
 
 BACKEND = '''
 """Just enough of a PEP 517 backend to build a pure-Python wheel offline."""
@@ -187,14 +191,15 @@ def fresh_registry(monkeypatch):
 
 
 # --------------------------------------------------------------------------------------- built-ins
-def test_builtin_tasks_listed_from_capmj_with_benchmark_tag():
+def test_builtin_tasks_listed_from_capmj_with_benchmark_or_generated_tag():
     infos = {i.name: i for i in registry.list_tasks()}
-    assert set(infos) == BUILTIN
+    assert set(infos) == CAPMJ_TASKS and BUILTIN < CAPMJ_TASKS
     for name, info in infos.items():
         assert info.distribution == "capmj" and info.version
         assert info.value.startswith("capmj_tasks.") and info.value.endswith(":TASK")
-        assert registry.tags_of(name) == {"benchmark"}
+        assert registry.tags_of(name) == ({"benchmark"} if name in BUILTIN else {"generated"})
     assert registry.resolve("benchmark") == sorted(BUILTIN)
+    assert registry.resolve("generated") == CAPMJ_GENERATED
     assert registry.broken(load=True) == {}
 
 
@@ -205,7 +210,7 @@ def test_listing_imports_no_plugin_module():
         names = [i.name for i in list_tasks()]
         print(json.dumps({"n": len(names), "mods": [m for m in sys.modules if m.startswith("capmj_tasks")]}))
     """)
-    assert out == {"n": 10, "mods": []}
+    assert out == {"n": len(CAPMJ_TASKS), "mods": []}
 
 
 def test_get_task_returns_a_working_cached_task():
@@ -230,7 +235,7 @@ def test_resolve_keeps_order_drops_repeats_and_expands_all():
     assert registry.resolve(["stack-blocks-of-same-size", "put-block-into-matching-bowl,stack-blocks-of-same-size"]) == [
         "stack-blocks-of-same-size", "put-block-into-matching-bowl"]
     got = registry.resolve("put-block-into-matching-bowl,all")
-    assert got[0] == "put-block-into-matching-bowl" and sorted(got) == sorted(BUILTIN)
+    assert got[0] == "put-block-into-matching-bowl" and sorted(got) == sorted(CAPMJ_TASKS)
 
 
 def test_register_validates_and_works_with_plugins_disabled(monkeypatch):
@@ -275,10 +280,11 @@ def test_third_party_package_runs_through_the_registry(sites):
                           "factory_tags": sorted(registry.tags_of("put-block-in-zone-generated"))}))
     """, sites["demo"])
     assert out["info"] == ["capmj-demo-tasks", "0.3.1", "demo_tasks.zone:TASK"]
-    assert out["n"] == 12 and out["goal"].startswith("Put the ")
+    assert out["n"] == len(CAPMJ_TASKS) + 2 and out["goal"].startswith("Put the ")
     assert (out["start"], out["end"], out["reward"]) == (False, True, 1.0)
     assert out["demo"] == ["put-block-in-zone", "put-block-in-zone-generated"]
-    assert out["generated"] == ["put-block-in-zone-generated"] and out["factory_tags"] == ["demo", "generated"]
+    assert out["generated"] == sorted(CAPMJ_GENERATED + ["put-block-in-zone-generated"])
+    assert out["factory_tags"] == ["demo", "generated"]
 
 
 def test_broken_plugin_is_reported_and_others_still_work(sites):
@@ -321,8 +327,8 @@ def test_duplicate_name_is_reported_naming_both_distributions(sites):
                           "other": registry.get_task("stack-blocks-of-same-size").name}))
     """, sites["dup"])
     assert "capmj 0.1.0" in out["err"] and "capmj-dup-tasks 1.0.0" in out["err"]
-    assert "stack-all-blocks-on-a-zone" not in out["listed"] and len(out["listed"]) == 9
-    assert out["broken"] == ["stack-all-blocks-on-a-zone"] and len(out["all"]) == 9
+    assert "stack-all-blocks-on-a-zone" not in out["listed"] and len(out["listed"]) == len(CAPMJ_TASKS) - 1
+    assert out["broken"] == ["stack-all-blocks-on-a-zone"] and len(out["all"]) == len(CAPMJ_TASKS) - 1
     assert out["other"] == "stack-blocks-of-same-size"
 
 
