@@ -360,3 +360,108 @@ def test_fixture_slots_and_occupants():
     assert P.slot_occupants(tilted, 1, [2, 3, 4]) == [2, 3, None]
     # the farthest point of the L (outer end of the long wall) is FIXTURE_RADIUS from the origin
     assert P.FIXTURE_RADIUS == pytest.approx(math.hypot(0.07, 0.03)) and P.FIXTURE_RADIUS > fx.footprint_radius
+
+
+# --------------------------------------------------------------------------------------- generated tasks 1–5
+def _blocks_at(points, colors=None, yaws=None):
+    """Small blocks at the given (x, y[, z]) centres (z defaults to the table), optional yaws."""
+    objs, poses = [], {}
+    for k, p in enumerate(points):
+        pos = (float(p[0]), float(p[1]), float(p[2]) if len(p) > 2 else 0.02)
+        objs.append(block(k + 1, pos, color=(colors[k] if colors else "red")))
+        poses[k + 1] = Pose(pos, yaw_quat(yaws[k] if yaws is not None else 0.0))
+    return objs, poses
+
+
+def _ring(n, r, centre=(0.5, 0.0), z=0.02, phase=0.0):
+    ang = phase + 2 * np.pi * np.arange(n) / n
+    return [(centre[0] + r * math.cos(a), centre[1] + r * math.sin(a), z) for a in ang], list(ang)
+
+
+def test_footprint_touching_and_supporters():
+    objs, poses = _blocks_at([(0.5, 0.0), (0.545, 0.0), (0.5, 0.0405), (0.5225, 0.02, 0.06)])
+    s = state_of(objs, poses)
+    assert P.footprint(s, 1).area == pytest.approx(0.0016)
+    pairs = {(a, b) for a, b, _ in P.touching_pairs(s, [1, 2, 3])}
+    assert pairs == {(1, 3)}  # 0.5 mm apart; 1 and 2 have 5 mm between them
+    assert sorted(P.supporters(s, 4, [1, 2, 3])) == [1, 2, 3]
+    turned = dict(poses)
+    turned[2] = Pose((0.545, 0.0, 0.02), yaw_quat(math.pi / 4))  # a corner now reaches within 1 mm
+    assert (1, 2) in {(a, b) for a, b, _ in P.touching_pairs(state_of(objs, turned), [1, 2])}
+    high = dict(poses)
+    high[4] = Pose((0.5225, 0.02, 0.08))  # floating 2 cm above: rests on nothing
+    assert P.supporters(state_of(objs, high), 4, [1, 2, 3]) == []
+
+
+def test_footprint_outside_zone_honours_scale_and_yaw():
+    zone = ObjectSpec(9, "zone", "blue", (0.5, 0.0, 0.0005), yaw=0.3, scale=2.0)
+    objs, poses = _blocks_at([(0.5, 0.0), (0.5, 0.11), (0.5, 0.2)])
+    s = state_of([zone] + objs, poses)
+    assert P.footprint_outside_zone(s, 1, 9) == 0.0
+    assert 0.0 < P.footprint_outside_zone(s, 2, 9) < 0.03  # centre in, a corner out
+    assert P.footprint_outside_zone(s, 3, 9) > 0.05
+
+
+def _layer(side, pitch, z=0.02, yaw=0.0, centre=(0.5, 0.0)):
+    cs, sn = math.cos(yaw), math.sin(yaw)
+    pts = []
+    for i in range(side):
+        for j in range(side):
+            u, v = (j - (side - 1) / 2) * pitch, (i - (side - 1) / 2) * pitch
+            pts.append((centre[0] + cs * u - sn * v, centre[1] + sn * u + cs * v, z))
+    return pts
+
+
+def test_is_layer_grid_height_and_near_miss():
+    pts = _layer(3, 0.05, yaw=0.4)
+    objs, poses = _blocks_at(pts, yaws=[0.4] * 9)
+    ids = list(range(1, 10))
+    assert P.is_layer(state_of(objs, poses), ids, 3, 3, 0, (0.04, 0.06))[0]
+    off = dict(poses)
+    p = pts[4]
+    off[5] = Pose((p[0] + 0.02, p[1], p[2]), yaw_quat(0.4))  # one block 2 cm off the grid
+    ok, why = P.is_layer(state_of(objs, off), ids, 3, 3, 0, (0.04, 0.06))
+    assert not ok and "misaligned" in why
+    ok, why = P.is_layer(state_of(objs, poses), ids, 3, 3, 1, (0.04, 0.06))  # wrong level
+    assert not ok and "layer 2" in why
+    tilted = dict(poses)
+    tilted[3] = Pose(pts[2], tilt_quat(math.radians(30)))
+    assert "tilted" in P.is_layer(state_of(objs, tilted), ids, 3, 3, 0, (0.04, 0.06))[1]
+
+
+def test_circle_of_and_alternation():
+    pts, ang = _ring(8, 0.09)
+    cols = ["red", "blue"] * 4
+    objs, poses = _blocks_at(pts, cols, ang)
+    s = state_of(objs, poses)
+    ids = list(range(1, 9))
+    ok, c, r, _ = P.circle_of(s, ids, min_radius=0.04)
+    assert ok and np.allclose(c, (0.5, 0.0)) and r == pytest.approx(0.09)
+    assert P.alternates(s, ids, c)[0]
+    swapped = ["red", "blue", "blue", "red", "red", "blue", "red", "blue"]  # two same-colour neighbours
+    objs2, poses2 = _blocks_at(pts, swapped, ang)
+    ok, why = P.alternates(state_of(objs2, poses2), ids, c)
+    assert not ok and "neighbours of the same colour" in why
+    assert not P.circle_of(s, ids, min_radius=0.1)[0]  # too small
+    bumped = dict(poses)
+    bumped[3] = Pose((pts[2][0], pts[2][1] + 0.03, 0.02))  # 3 cm outwards
+    ok, _, _, why = P.circle_of(state_of(objs, bumped), ids)
+    assert not ok and "block 3" in why
+    three, _ = _blocks_at([(0.4, 0.0), (0.5, 0.0), (0.6, 0.0)], ["red", "blue", "red"])
+    assert not P.circle_of(state_of(three), [1, 2, 3])[0]  # collinear
+    assert not P.alternates(state_of(three), [1, 2, 3], (0.5, 0.1))[0]  # odd count cannot alternate
+
+
+def test_concentric_circles():
+    inner, a1 = _ring(4, 0.06)
+    outer, a2 = _ring(8, 0.12, phase=0.2)
+    objs, poses = _blocks_at(inner + outer, ["red"] * 4 + ["blue"] * 8, a1 + a2)
+    ids1, ids2 = [1, 2, 3, 4], list(range(5, 13))
+    assert P.concentric(state_of(objs, poses), ids1, ids2)[0]
+    shifted_pts, _ = _ring(8, 0.12, centre=(0.53, 0.0), phase=0.2)  # outer circle 3 cm off
+    objs2, poses2 = _blocks_at(inner + shifted_pts, ["red"] * 4 + ["blue"] * 8, a1 + a2)
+    ok, why = P.concentric(state_of(objs2, poses2), ids1, ids2)
+    assert not ok and "centres are 0.030 m apart" in why
+    close_pts, _ = _ring(8, 0.09, phase=0.2)  # radii only 3 cm apart
+    objs3, poses3 = _blocks_at(inner + close_pts, ["red"] * 4 + ["blue"] * 8, a1 + a2)
+    assert "differ by less" in P.concentric(state_of(objs3, poses3), ids1, ids2)[1]

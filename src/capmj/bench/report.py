@@ -2,8 +2,12 @@
 
 ``summary.md`` is shaped like the CapRavens thesis's Table 5.2: tasks as rows, one column per
 configuration (agent, model — plus the LLM options that differ, when several folders are
-compared), cells ``"96 % [87–99]"`` = success rate and its 95 % Wilson interval.  ``summary.png``
-draws the same numbers as bars with the intervals as error bars (matplotlib, Agg backend).
+compared), cells ``"96 % [87–99]"`` = success rate and its 95 % Wilson interval.  When the run
+holds generated tasks 1–10, they get a second table shaped like the thesis's Table 5.4 (the
+generated tasks as rows, in the spec's order), and each table ends with the pooled rate of its own
+rows, so the benchmark figure is not diluted by the generated tasks or the other way round.
+``summary.png`` draws the same numbers as bars with the intervals as error bars (matplotlib, Agg
+backend).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from capmj.bench.results import (
     load_json,
     read_results,
     summarize,
+    wilson,
     write_json_atomic,
 )
 from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
@@ -41,18 +46,63 @@ TASK_LETTERS: dict[str, str] = {
 }
 """The thesis's letters of the benchmark tasks (Table 5.1), shown in front of the names."""
 
+GENERATED_NUMBERS: dict[str, int] = {
+    "build-rectangular-pyramid": 1,
+    "build-cube": 2,
+    "construct-circle-with-blocks": 3,
+    "construct-circle-ball-middle": 4,
+    "build-concentric-circles": 5,
+    "divide-blocks": 6,
+    "max-odd-number-blocks-in-same-color-zone": 7,
+    "stack-most-color-block": 8,
+    "zone-bisector": 9,
+    "insert-blocks-in-fixture": 10,
+}
+"""The thesis's numbers of the generated tasks (Tables 5.3 and 5.4): their rows' order and labels."""
+
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
 def _order(task: str) -> tuple[int, str]:
     letter = TASK_LETTERS.get(task)
-    return (0, letter) if letter else (1, task)
+    if letter:
+        return (0, letter)
+    if task in GENERATED_NUMBERS:
+        return (2, f"{GENERATED_NUMBERS[task]:02d}")
+    return (1, task)
 
 
 def task_label(task: str) -> str:
-    letter = TASK_LETTERS.get(task)
+    letter = TASK_LETTERS.get(task) or GENERATED_NUMBERS.get(task)
     return f"{letter} {task}" if letter else task
+
+
+def pooled(summary: Mapping[str, Any], tasks: Sequence[str], label: str) -> dict[str, Any] | None:
+    """Success count, rate and Wilson interval of one configuration pooled over ``tasks``."""
+    cells = [summary["tasks"][t][label] for t in tasks if label in summary["tasks"][t]]
+    n = sum(c["n"] for c in cells)
+    if not n:
+        return None
+    k = sum(c["successes"] for c in cells)
+    return {"n": n, "successes": k, "success_rate": k / n, "ci95": list(wilson(k, n))}
+
+
+def _success_table(summary: Mapping[str, Any], tasks: Sequence[str], labels: Sequence[str], first: str,
+                   total: str | None) -> list[str]:
+    """Tasks as rows, one column per configuration; ``total`` names a pooled last row (None: the
+    run's overall row)."""
+    out = [f"| {first} | " + " | ".join(labels) + " |", "|---|" + "---:|" * len(labels)]
+    for t in tasks:
+        cells = [pct_cell(summary["tasks"][t].get(lab), show_n=True) for lab in labels]  # n in every cell
+        out.append(f"| {task_label(t)} | " + " | ".join(cells) + " |")
+    if total is None:
+        foot = [summary["overall"][lab] for lab in labels]
+        total = "Overall"
+    else:
+        foot = [pooled(summary, tasks, lab) for lab in labels]
+    out.append(f"| **{total}** | " + " | ".join(f"**{pct_cell(st, show_n=True)}**" for st in foot) + " |")
+    return out
 
 
 def pct_cell(st: Mapping[str, Any] | None, show_n: bool = False) -> str:
@@ -70,23 +120,27 @@ def _fmt(v: Any, nd: int = 2) -> str:
 
 def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
              sources: Sequence[str] = ()) -> str:
-    """The Markdown report: the Table-5.2-shaped success table, then per-cell details."""
+    """The Markdown report: the Table-5.2-shaped success table (plus the Table-5.4-shaped one of
+    the generated tasks when there are any), then per-cell details."""
     labels = list(summary["overall"])
     tasks = sorted(summary["tasks"], key=_order)
-    ns = {lab: {summary["tasks"][t][lab]["n"] for t in tasks if lab in summary["tasks"][t]} for lab in labels}
-    uniform = {lab: len(v) == 1 for lab, v in ns.items()}
-    head = [f"{lab} (n={next(iter(ns[lab]))})" if uniform[lab] and ns[lab] else lab for lab in labels]
+    generated = [t for t in tasks if t in GENERATED_NUMBERS]
+    others = [t for t in tasks if t not in GENERATED_NUMBERS]
     out = [f"# {title}", ""]
     if sources:
         out += ["Sources: " + ", ".join(f"`{s}`" for s in sources), ""]
-    out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", "",
-            "| Task | " + " | ".join(head) + " |",
-            "|---|" + "---:|" * len(labels)]
-    for t in tasks:
-        cells = [pct_cell(summary["tasks"][t].get(lab), show_n=True) for lab in labels]
-        out.append(f"| {task_label(t)} | " + " | ".join(cells) + " |")
-    out.append("| **Overall** | " + " | ".join(f"**{pct_cell(summary['overall'][lab], show_n=True)}**"
-                                              for lab in labels) + " |")
+    out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", ""]
+    if not generated:
+        out += _success_table(summary, tasks, labels, "Task", None)
+    else:
+        if others:
+            out += ["## Benchmark tasks (thesis Table 5.2)", ""]
+            out += _success_table(summary, others, labels, "Task", "All benchmark tasks") + [""]
+        out += ["## Generated tasks (thesis Table 5.4)", ""]
+        out += _success_table(summary, generated, labels, "Generated task", "All generated tasks")
+        if others:
+            out += ["", f"Overall, all {len(tasks)} tasks: "
+                    + ", ".join(f"{lab} {pct_cell(summary['overall'][lab])}" for lab in labels)]
     out += ["", "## Details", "",
             "| Task | Configuration | n | successes | success | 95 % CI | mean progress | mean primitives "
             "| errors | wall total (s) | wall mean (s) |",
@@ -270,5 +324,5 @@ def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tup
     return summary, md
 
 
-__all__ = ["TASK_LETTERS", "load_folders", "markdown", "pct_cell", "plot", "report", "summarize_dir", "task_label",
-           "write_summary"]
+__all__ = ["GENERATED_NUMBERS", "TASK_LETTERS", "load_folders", "markdown", "pct_cell", "plot", "pooled", "report",
+           "summarize_dir", "task_label", "write_summary"]

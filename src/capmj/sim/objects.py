@@ -104,6 +104,17 @@ class ObjectSpec:
         hx, hy, _ = self.half_extents
         return math.hypot(hx, hy)
 
+    @property
+    def xy_extent(self) -> tuple[float, float]:
+        """Half sizes (m) of the axis-aligned xy box of the footprint at the object's own yaw
+        (round objects: the radius).  Tighter than ``footprint_radius`` for large zones, whose
+        circumscribed circle may not fit in the workspace although the square does."""
+        hx, hy, _ = self.half_extents
+        if self.kind in ("ball", "bowl"):
+            return (hx, hy)
+        c, s = abs(math.cos(self.yaw)), abs(math.sin(self.yaw))
+        return (hx * c + hy * s, hx * s + hy * c)
+
     def moved(self, pos: tuple[float, float, float], yaw: float | None = None) -> "ObjectSpec":
         """A copy at another pose (used by scene generators while sampling)."""
         from dataclasses import replace

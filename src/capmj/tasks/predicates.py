@@ -597,3 +597,137 @@ __all__ += [
     "RowReport", "SLOT_TOL", "ZoneStack", "fixture_slots", "group_sizes", "largest_odd_at_most", "row_on_line",
     "slot_occupants", "zone_color_counts", "zone_stacks",
 ]
+
+
+# ======================================================================================= generated
+# Layouts of the generated tasks 1–5 (pyramid, cube, circles, concentric circles).  Footprints are
+# the objects' real oriented squares (shapely), so "touching" and "inside the zone" mean what a
+# reader of the final snapshot would see, not a bounding circle.
+TOUCH_GAP = 0.001
+"""Two footprints closer than this (m) touch."""
+CIRCLE_TOL = 0.01
+"""Every centre of a circle lies within this distance (m) of the fitted circle."""
+CENTRE_TOL = 0.02
+"""Two circles (or a circle and the ball) are concentric when their centres are this close (m)."""
+
+
+def footprint(state: SceneState, obj_id: int):
+    """The object's footprint on the table as a shapely polygon: its oriented xy rectangle at the
+    current yaw (a tilted object: its world xy box from the half extents), a disc for balls."""
+    from shapely.geometry import Point, Polygon, box
+
+    spec, pose = state.spec(obj_id), state.poses[obj_id]
+    c = state.pos(obj_id)
+    hx, hy, hz = spec.half_extents
+    if spec.kind in ("ball", "bowl"):
+        return Point(c[0], c[1]).buffer(hx, 32)
+    if pose.tilt > TILT_TOL:
+        ext = np.abs(pose.rotation) @ np.array([hx, hy, hz])
+        return box(c[0] - ext[0], c[1] - ext[1], c[0] + ext[0], c[1] + ext[1])
+    cs, sn = math.cos(pose.yaw), math.sin(pose.yaw)
+    corners = [(c[0] + cs * u - sn * v, c[1] + sn * u + cs * v) for u, v in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
+    return Polygon(corners)
+
+
+def footprint_outside_zone(state: SceneState, obj_id: int, zone_id: int) -> float:
+    """How far (m) the object's footprint reaches outside the zone square; 0 when inside."""
+    from shapely.geometry import Point
+
+    zone = footprint(state, zone_id)
+    return float(max(zone.distance(Point(p)) for p in footprint(state, obj_id).exterior.coords))
+
+
+def touching_pairs(state: SceneState, ids: Sequence[int], gap: float = TOUCH_GAP) -> list[tuple[int, int, float]]:
+    """Pairs ``(a, b, distance)`` of the objects whose footprints are closer than ``gap`` (m)."""
+    fps = {i: footprint(state, i) for i in ids}
+    ids = list(ids)
+    return [(a, b, float(fps[a].distance(fps[b])))
+            for k, a in enumerate(ids) for b in ids[k + 1:] if fps[a].distance(fps[b]) < gap]
+
+
+def supporters(state: SceneState, upper: int, lowers: Iterable[int], tol: float = Z_TOL) -> list[int]:
+    """The objects of ``lowers`` that ``upper`` rests on: the z gap of their centres is the mean of
+    the two heights ± 0.015 m and their footprints overlap (area > 1 mm²)."""
+    fu = footprint(state, upper)
+    out = []
+    for lo in lowers:
+        gap = (state.spec(upper).height + state.spec(lo).height) / 2
+        if abs(float(state.pos(upper)[2] - state.pos(lo)[2]) - gap) <= tol and fu.intersection(footprint(state, lo)).area > 1e-6:
+            out.append(lo)
+    return out
+
+
+def is_layer(state: SceneState, ids: Sequence[int], rows: int, cols: int, level: int,
+             pitch_range: tuple[float, float], align_tol: float = Z_TOL) -> tuple[bool, str]:
+    """Whether the blocks form one ``rows × cols`` grid layer (:func:`is_grid`: neighbour pitch in
+    ``pitch_range``, rows and columns aligned within ``align_tol``) at height ``level`` (0 = on the
+    table: every centre at (level + ½) block heights ± 0.015 m), none tilted more than 15°."""
+    for i in ids:
+        if toppled(state, i):
+            return False, f"{short_label(state.spec(i))} is tilted {math.degrees(state.poses[i].tilt):.0f}° (max 15°)"
+        h = state.spec(i).height
+        z = float(state.pos(i)[2])
+        if abs(z - (level + 0.5) * h) > Z_TOL:
+            return False, f"{short_label(state.spec(i))} is at z = {z:.3f} m, not on layer {level + 1} ({(level + 0.5) * h:.3f} ± {Z_TOL})"
+    return is_grid([state.pos(i) for i in ids], rows, cols, pitch_range, align_tol)
+
+
+def circle_of(state: SceneState, ids: Sequence[int], tol: float = CIRCLE_TOL,
+              min_radius: float = 0.0) -> tuple[bool, np.ndarray, float, str]:
+    """Whether the xy centres of ``ids`` lie on one circle: ``(ok, centre, radius, reason)``.
+
+    The circle is the least-squares fit (:func:`fit_circle`); every centre must be within ``tol``
+    (0.01 m) of it and the radius at least ``min_radius`` (m)."""
+    c, r, res = fit_circle([state.pos(i) for i in ids])
+    if not math.isfinite(r):
+        return False, c, r, f"{len(ids)} centres do not span a circle (fewer than 3 or collinear)"
+    if res > tol:
+        d = [abs(math.hypot(*(state.pos(i)[:2] - c)) - r) for i in ids]
+        worst = ids[int(np.argmax(d))]
+        return False, c, r, (f"{short_label(state.spec(worst))} is {max(d):.3f} m off the fitted circle "
+                             f"(radius {r:.3f} m, max {tol})")
+    if r < min_radius:
+        return False, c, r, f"circle radius {r:.3f} m is below {min_radius:.3f} m"
+    return True, c, r, f"circle of radius {r:.3f} m at ({c[0]:.3f}, {c[1]:.3f})"
+
+
+def angular_order(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> list[int]:
+    """``ids`` sorted by the angle of their xy centre around ``centre``."""
+    return sorted(ids, key=lambda i: math.atan2(state.pos(i)[1] - centre[1], state.pos(i)[0] - centre[0]))
+
+
+def alternates(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> tuple[bool, str]:
+    """Whether colours alternate going round ``centre`` (cyclically: two colours, equal counts,
+    no two angular neighbours of one colour); the reason names a same-coloured neighbour pair."""
+    order = angular_order(state, ids, centre)
+    colours = {state.spec(i).color for i in ids}
+    if len(colours) != 2:
+        return False, f"alternation needs exactly two colours, got {', '.join(sorted(colours))}"
+    for a, b in zip(order, order[1:] + order[:1]):
+        if state.spec(a).color == state.spec(b).color:
+            return False, f"{short_label(state.spec(a))} and {short_label(state.spec(b))} are neighbours of the same colour"
+    return True, "colours alternate"
+
+
+def concentric(state: SceneState, ring_a: Sequence[int], ring_b: Sequence[int], centre_tol: float = CENTRE_TOL,
+               min_gap: float = 0.04, tol: float = CIRCLE_TOL) -> tuple[bool, str]:
+    """Whether ``ring_a`` and ``ring_b`` each lie on a circle (:func:`circle_of`, ``tol``), the two
+    centres within ``centre_tol`` (0.02 m) and the radii at least ``min_gap`` (m) apart."""
+    ok_a, ca, ra, why_a = circle_of(state, ring_a, tol)
+    if not ok_a:
+        return False, why_a
+    ok_b, cb, rb, why_b = circle_of(state, ring_b, tol)
+    if not ok_b:
+        return False, why_b
+    d = float(np.hypot(*(ca - cb)))
+    if d > centre_tol:
+        return False, f"the circle centres are {d:.3f} m apart (max {centre_tol})"
+    if abs(ra - rb) < min_gap:
+        return False, f"the radii {ra:.3f} m and {rb:.3f} m differ by less than {min_gap} m"
+    return True, f"concentric circles of radii {min(ra, rb):.3f} m and {max(ra, rb):.3f} m"
+
+
+__all__ += [
+    "CENTRE_TOL", "CIRCLE_TOL", "TOUCH_GAP", "alternates", "angular_order", "circle_of", "concentric", "footprint",
+    "footprint_outside_zone", "is_layer", "supporters", "touching_pairs",
+]

@@ -109,9 +109,17 @@ class Spawner:
         radius: float,
         region: "str | Bounds | Sequence[float] | None" = None,
         avoid: Iterable["str | Bounds | Sequence[float]"] = (),
+        extent: tuple[float, float] | None = None,
     ) -> tuple[float, float]:
-        """A free centre for a footprint of ``radius``; raises ``Resample`` after ``tries``."""
-        b = centre_bounds(radius, self.bounds)
+        """A free centre for a footprint of ``radius``; raises ``Resample`` after ``tries``.
+
+        ``extent`` (the footprint's axis-aligned half sizes, known when the yaw is fixed) keeps
+        the footprint itself inside the workspace instead of its circumscribed circle."""
+        if extent is None:
+            b = centre_bounds(radius, self.bounds)
+        else:
+            w = WORKSPACE_BOUNDS
+            b = self.bounds.intersect(Bounds(w.xmin + extent[0], w.xmax - extent[0], w.ymin + extent[1], w.ymax - extent[1]))
         if region is not None:
             b = b.intersect(region_bounds(region).shrink(self.area_margin))
         if b.empty:
@@ -143,9 +151,12 @@ class Spawner:
         avoid: Iterable["str | Bounds | Sequence[float]"] = (),
         yaw: float | None = None,
     ) -> ObjectSpec:
-        """Create and place one object resting on the table; returns its spec (id = next id)."""
-        probe = ObjectSpec(self.next_id, kind, color, (0.0, 0.0, 0.0), size=size, scale=scale)  # type: ignore[arg-type]
-        x, y = self.sample_xy(probe.footprint_radius, region, avoid)
+        """Create and place one object resting on the table; returns its spec (id = next id).
+
+        With ``yaw`` given, the footprint square at that yaw (not its circumscribed circle) must
+        lie inside the workspace: how a 3× zone (0.36 m side) fits the 0.5 m deep table."""
+        probe = ObjectSpec(self.next_id, kind, color, (0.0, 0.0, 0.0), yaw=yaw or 0.0, size=size, scale=scale)  # type: ignore[arg-type]
+        x, y = self.sample_xy(probe.footprint_radius, region, avoid, None if yaw is None else probe.xy_extent)
         if yaw is None:
             yaw = float(self.rng.uniform(0.0, 2 * math.pi))
         spec = probe.moved((x, y, resting_z(kind, size, scale)), yaw)
