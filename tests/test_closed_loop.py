@@ -15,7 +15,7 @@ import pytest
 from capmj.bench.report import markdown
 from capmj.bench.results import summarize
 from llm_stub_server import StubLLMServer
-from test_llm_chain import REPORTER, RIGHT_PLAN, Router, agent, code, episode, lmp_of, server  # noqa: F401
+from test_llm_chain import REPORTER, Router, agent, code, episode, lmp_of
 
 JUDGE_FALSE = "judge = False\nreason = 'the blocks are not stacked'\nwrong = ['movable small cyan block with obj_id 3']"
 

@@ -23,7 +23,7 @@ def test_divide_blocks_wrong_group_sizes(seed):
     t, scene, goals, state = solved("divide-blocks", seed)
     assert t.evaluate(scene, state).success
     towers = sorted(stacks_of(scene, goals), key=lambda kv: -len(kv[1]))
-    (z_big, big), (z_other, other), (z_small, small) = towers[0], towers[1], towers[-1]
+    (z_big, big), (z_other, other), (_, small) = towers[0], towers[1], towers[-1]
     # the top block of a full group moved onto another full group: one group too small, one too big
     moved = rebuild_tower(state, other + [big[-1]], state.pos(z_other)[:2])
     v = assert_rejects(t, scene, moved, "a stack group of the wrong size")

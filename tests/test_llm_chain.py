@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import base64
 import io
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -102,12 +102,6 @@ class Router:
         if handler is None:
             raise AssertionError(f"no scripted answer for {lmp}")
         return handler(request) if callable(handler) else handler
-
-
-@pytest.fixture
-def server() -> Iterator[StubLLMServer]:
-    with StubLLMServer() as stub:
-        yield stub
 
 
 def agent(server: StubLLMServer, **kw: Any) -> LLMAgent:

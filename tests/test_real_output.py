@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from llm_stub_server import Reply, StubLLMServer
-from test_llm_chain import OBJ_NAMES, MemoryRecorder, Router, agent, code, episode, server  # noqa: F401
+from test_llm_chain import OBJ_NAMES, MemoryRecorder, Router, agent, code, episode
 
 ZONE = "fixed orange zone with obj_id 1"
 CYAN, YELLOW, PINK = ("movable small cyan block with obj_id 3", "movable small yellow block with obj_id 4",
@@ -222,7 +222,7 @@ say(str(all(kinds) and isinstance(Point(0, 0), Point) and pick in names))
 # 5. near-miss object names
 # ------------------------------------------------------------------------------------------------
 def test_near_miss_names_resolve_when_one_object_fits(server: StubLLMServer) -> None:
-    plan = f"""
+    plan = """
 put_first_on_second('yellow block with obj_id 4', 'orange zone')
 put_first_on_second('movable_cyan_block_with_obj_id_3', 'movable small yellow block with obj_id 4')
 """

@@ -102,7 +102,8 @@ class RayGrid:
             raise ConfigError(f"--workers {self.workers} needs {self.workers} CPUs on the Ray cluster; "
                               f"it has {cpus:g}: lower --workers or add nodes")
         remote = ray.remote(num_cpus=1, max_restarts=0)(EpisodeActor)
-        self._ray, self._remote, self._actors = ray, remote, []
+        self._ray, self._remote = ray, remote
+        self._actors: list[Any] = []
         try:
             self._run(deque(jobs))
         finally:

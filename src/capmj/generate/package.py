@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import json
 import shutil
-from pathlib import Path
 from typing import Sequence
 
 from capmj.generate.candidate import CandidateRecord
@@ -77,7 +76,7 @@ def _readme(cfg: GenerateConfig, records: Sequence[CandidateRecord]) -> str:
              f"only after physics checks: oracle success on >= {cfg.accept_rate:g} of {cfg.seeds} distinct seeds, "
              "deterministic scenes, goal text naming only present objects, not solved at reset, a do-nothing "
              "episode failing, and the Ravens reward agreeing with the predicate.", "",
-             "```", f"pip install -e .            # the tasks appear in python -m capmj.bench --list",
+             "```", "pip install -e .            # the tasks appear in python -m capmj.bench --list",
              f"python -m capmj.bench --tasks {GENERATED_TAG} --seeds 10001:10011:2",
              f"python -m pytest {TEST_FILE}   # re-run the runtime checks", "```", "",
              f"{len(acc)} of {len(records)} candidates accepted.", ""]
