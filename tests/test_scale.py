@@ -252,6 +252,7 @@ def ray_cluster(tmp_path_factory):
 
 
 @pytest.mark.ray
+@pytest.mark.timeout(600)
 def test_ray_executor_matches_local_and_retries_a_killed_worker(ray_cluster, server, tmp_path):
     from capmj.tasks import registry
 
