@@ -92,7 +92,9 @@ def _success_table(summary: Mapping[str, Any], tasks: Sequence[str], labels: Seq
                    total: str | None) -> list[str]:
     """Tasks as rows, one column per configuration; ``total`` names a pooled last row (None: the
     run's overall row)."""
-    out = [f"| {first} | " + " | ".join(labels) + " |", "|---|" + "---:|" * len(labels)]
+    ns = {lab: {summary["tasks"][t][lab]["n"] for t in tasks if lab in summary["tasks"][t]} for lab in labels}
+    head = [f"{lab} (n={next(iter(ns[lab]))})" if len(ns[lab]) == 1 else lab for lab in labels]
+    out = [f"| {first} | " + " | ".join(head) + " |", "|---|" + "---:|" * len(labels)]
     for t in tasks:
         cells = [pct_cell(summary["tasks"][t].get(lab), show_n=True) for lab in labels]  # n in every cell
         out.append(f"| {task_label(t)} | " + " | ".join(cells) + " |")
