@@ -183,7 +183,24 @@ class GridStats:
     wall_s: float = 0.0           # elapsed time of the whole grid
 
 
-class Grid:
+class RecordSink:
+    """What every executor does with a finished episode: count it, hand it to ``on_result``."""
+
+    agent: AgentSpec
+    stats: GridStats
+    on_result: Callable[[Job, dict[str, Any]], None]
+
+    def _emit(self, job: Job, rec: dict[str, Any]) -> None:
+        self.stats.done += 1
+        self.stats.successes += bool(rec.get("success"))
+        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
+        self.on_result(job, rec)
+
+    def _failed(self, job: Job, error: str) -> dict[str, Any]:
+        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
+
+
+class Grid(RecordSink):
     """Runs jobs on a pool and hands every record to ``on_result`` (in the parent process).
 
     ``concurrency`` episodes run at once inside each worker process (see :func:`run_batch`): the
@@ -248,15 +265,6 @@ class Grid:
             except Exception:  # noqa: BLE001
                 pass
         pool.shutdown(wait=True, cancel_futures=True)
-
-    def _emit(self, job: Job, rec: dict[str, Any]) -> None:
-        self.stats.done += 1
-        self.stats.successes += bool(rec.get("success"))
-        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
-        self.on_result(job, rec)
-
-    def _failed(self, job: Job, error: str) -> dict[str, Any]:
-        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
 
     # .................................................................. running
     def run(self, jobs: Iterable[Job]) -> GridStats:
@@ -412,5 +420,5 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
     return stats
 
 
-__all__ = ["AgentSpec", "Grid", "GridStats", "Job", "MP_CONTEXT", "crash_error", "episode_key", "failed_record",
-           "init_worker", "rrd_relpath", "run_batch", "run_job", "run_jobs_to_file"]
+__all__ = ["AgentSpec", "Grid", "GridStats", "Job", "MP_CONTEXT", "RecordSink", "crash_error", "episode_key",
+           "failed_record", "init_worker", "rrd_relpath", "run_batch", "run_job", "run_jobs_to_file"]

@@ -24,7 +24,7 @@ import threading
 from collections import deque
 from typing import Any, Callable, Iterable, Sequence
 
-from capmj.bench.grid import AgentSpec, GridStats, Job, crash_error, failed_record, init_worker, run_job
+from capmj.bench.grid import AgentSpec, GridStats, Job, RecordSink, crash_error, init_worker, run_job
 from capmj.errors import ConfigError
 
 FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "OPENAI_API_KEY",
@@ -51,7 +51,7 @@ class EpisodeActor:
         return run_job(job)
 
 
-class RayGrid:
+class RayGrid(RecordSink):
     """Same contract as :class:`~capmj.bench.grid.Grid`: ``run(jobs)`` hands each record to ``on_result``."""
 
     def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
@@ -67,15 +67,6 @@ class RayGrid:
         self.address = address
         self.stop = stop or (lambda: False)  # checked before each new episode (run budget)
         self.stats = GridStats()
-
-    def _emit(self, job: Job, rec: dict[str, Any]) -> None:
-        self.stats.done += 1
-        self.stats.successes += bool(rec.get("success"))
-        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
-        self.on_result(job, rec)
-
-    def _failed(self, job: Job, error: str) -> dict[str, Any]:
-        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
 
     def run(self, jobs: Iterable[Job]) -> GridStats:
         jobs = list(jobs)
