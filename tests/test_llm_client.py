@@ -61,6 +61,29 @@ def test_completion_through_real_server(server: StubLLMServer) -> None:
     assert client.records[0].purpose == "plan"
 
 
+def test_per_call_temperature_and_seed_reach_the_server(server: StubLLMServer) -> None:
+    server.script("a", "b")
+    client = make_client(server, temperature=0.0)
+    client.complete(HELLO)
+    client.complete(HELLO, temperature=1.3, seed=123456)
+    first, second = server.requests
+    assert first["temperature"] == 0.0 and "seed" not in first  # no seed unless one is asked for
+    assert second["temperature"] == 1.3 and second["seed"] == 123456
+    with pytest.raises(ConfigError, match="temperature"):
+        client.complete(HELLO, temperature=-0.5)
+    with pytest.raises(ConfigError, match="seed"):
+        client.complete(HELLO, seed="7")  # type: ignore[arg-type]
+    assert len(server.requests) == 2
+
+
+def test_seed_is_sent_only_to_providers_that_take_it() -> None:
+    from capmj.llm.client import takes_seed
+
+    assert takes_seed("openai/qwen2.5-coder-1.5b", "http://127.0.0.1:8080/v1")  # llama.cpp
+    assert takes_seed("ollama/qwen2.5-coder") and takes_seed("gpt-4o-mini")
+    assert not takes_seed("anthropic/claude-3-haiku-20240307")  # litellm would reject it
+
+
 def test_dummy_key_for_local_api_base(server: StubLLMServer) -> None:
     server.script("ok")
     client = make_client(server, api_key=None)
@@ -142,14 +165,20 @@ def test_second_identical_call_is_served_from_cache(server: StubLLMServer, tmp_p
     assert (usage.calls, usage.cached_calls) == (2, 1)
 
 
-@pytest.mark.parametrize("change", ["temperature", "max_tokens", "message", "model", "api_base"])
+@pytest.mark.parametrize("change", ["temperature", "call_temperature", "seed", "max_tokens", "message", "model",
+                                    "api_base"])
 def test_cache_misses_when_request_changes(server: StubLLMServer, tmp_path: Path,
                                            change: str) -> None:
     server.script("one", "two")
-    make_client(server, cache_dir=tmp_path).complete(HELLO)
+    make_client(server, cache_dir=tmp_path).complete(HELLO, seed=1)
     overrides: dict[str, object] = {"cache_dir": tmp_path}
     messages = HELLO
-    if change == "temperature":
+    sampling: dict[str, object] = {"seed": 1}
+    if change == "call_temperature":
+        sampling["temperature"] = 0.7
+    elif change == "seed":
+        sampling["seed"] = 2
+    elif change == "temperature":
         overrides["temperature"] = 0.7
     elif change == "max_tokens":
         overrides["max_tokens"] = 100
@@ -159,9 +188,27 @@ def test_cache_misses_when_request_changes(server: StubLLMServer, tmp_path: Path
         overrides["api_base"] = server.base_url.replace("127.0.0.1", "localhost")
     else:
         messages = [HELLO[0], {"role": "user", "content": "Say goodbye."}]
-    second = make_client(server, **overrides).complete(messages)
+    second = make_client(server, **overrides).complete(messages, **sampling)  # type: ignore[arg-type]
     assert (second.text, second.cached) == ("two", False)
     assert len(server.requests) == 2
+
+
+def test_seeded_call_replays_from_the_cache_and_seedless_keys_are_unchanged(server: StubLLMServer,
+                                                                           tmp_path: Path) -> None:
+    server.script("seeded", "unseeded")
+    make_client(server, cache_dir=tmp_path).complete(HELLO, temperature=0.9, seed=42)
+    make_client(server, cache_dir=tmp_path).complete(HELLO, temperature=0.9)
+    again = make_client(server, cache_dir=tmp_path).complete(HELLO, temperature=0.9, seed=42)
+    assert (again.text, again.cached) == ("seeded", True) and len(server.requests) == 2
+    base = dict(model="m", api_base=None, messages=HELLO, temperature=0.9, max_tokens=10)
+    assert cache_key(**base, seed=None) == cache_key(**base)  # type: ignore[arg-type]
+    assert cache_key(**base, seed=0) != cache_key(**base)  # type: ignore[arg-type]
+    # a request without a seed keeps the key it had before seeds existed (old caches stay valid)
+    old = {"format": 1, "model": "m", "api_base": None, "messages": HELLO, "temperature": 0.9, "max_tokens": 10}
+    import hashlib
+
+    digest = hashlib.sha256(json.dumps(old, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode())
+    assert cache_key(**base) == digest.hexdigest()  # type: ignore[arg-type]
 
 
 def test_corrupt_cache_file_is_a_miss_and_is_overwritten(server: StubLLMServer,

@@ -2,8 +2,10 @@
 
 Why: benchmark runs are repeated (debugging a task, re-scoring, CI) and a temperature-0 answer to
 the same request is worth reusing instead of paying for it again.  The key covers model, api_base,
-the full messages (images included), temperature and max_tokens, but never the API key: rotating a
-key must not invalidate the cache, and secrets must not be derivable from file names.
+the full messages (images included), temperature, max_tokens and the sampling seed (when one is
+sent: requests without a seed keep the keys they had before seeds were sent), but never the API
+key: rotating a key must not invalidate the cache, and secrets must not be derivable from file
+names.
 
 Layout: ``<root>/<key[:2]>/<key[2:4]>/<key>.json`` (two-level fan-out keeps directories small).
 Files are written atomically (temporary file + ``os.replace``) so a crash or a parallel run never
@@ -49,9 +51,10 @@ def cache_key(
     messages: Sequence[Mapping[str, Any]],
     temperature: float,
     max_tokens: int,
+    seed: int | None = None,
 ) -> str:
     """sha256 hex digest of the canonical JSON of the request's answer-determining fields."""
-    payload = {
+    payload: dict[str, Any] = {
         "format": CACHE_FORMAT,
         "model": model,
         "api_base": api_base,
@@ -59,6 +62,8 @@ def cache_key(
         "temperature": float(temperature),
         "max_tokens": int(max_tokens),
     }
+    if seed is not None:
+        payload["seed"] = int(seed)
     try:
         canonical = json.dumps(
             payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False

@@ -10,6 +10,7 @@ record.  litellm is imported lazily because importing it costs seconds, and with
 from __future__ import annotations
 
 import base64
+import functools
 import logging
 import math
 import os
@@ -25,7 +26,7 @@ from capmj.errors import ConfigError, LLMError
 from capmj.llm.cache import CompletionCache, cache_key
 
 __all__ = ["CallRecord", "Completion", "DEFAULT_TIMEOUT_S", "LLMClient", "LLMConfig", "Usage", "image_part",
-           "set_request_gate", "text_part"]
+           "set_request_gate", "takes_seed", "text_part"]
 
 DEFAULT_TIMEOUT_S = 300.0
 """Per-request timeout.  Generous on purpose: a 1.5B model on 2 CPU cores needs 40-90 s for a cold
@@ -267,23 +268,33 @@ class LLMClient:
 
     # -- the call ---------------------------------------------------------------------------
     def complete(self, messages: Sequence[Message], *, purpose: str = "",
-                 mock_response: str | None = None) -> Completion:
+                 mock_response: str | None = None, temperature: float | None = None,
+                 seed: int | None = None) -> Completion:
         """Answer ``messages`` (OpenAI chat format), from the cache when possible.
 
-        ``mock_response`` (or ``config.mock_response``) makes litellm answer offline without any
-        HTTP; such answers are never cached, so they cannot poison a cache used for real runs.
-        Raises :class:`LLMError` when the provider fails after all retries or answers no text.
+        ``temperature`` overrides ``config.temperature`` for this call; ``seed`` asks the provider
+        to sample reproducibly (the OpenAI ``seed`` parameter, honoured by OpenAI, llama.cpp,
+        Ollama, vLLM; not sent to providers litellm knows do not take it).  Both are part of the
+        cache key.  ``mock_response`` (or ``config.mock_response``) makes litellm answer offline
+        without any HTTP; such answers are never cached, so they cannot poison a cache used for
+        real runs.  Raises :class:`LLMError` when the provider fails after all retries or answers
+        no text.
         """
         cfg = self.config
         if not messages or not all(isinstance(m, Mapping) and "role" in m for m in messages):
             raise ConfigError("messages must be a non-empty list of {'role': ..., 'content': ...}")
+        temperature = cfg.temperature if temperature is None else float(temperature)
+        if not (math.isfinite(temperature) and temperature >= 0):
+            raise ConfigError(f"temperature must be a finite number >= 0, got {temperature}")
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+            raise ConfigError(f"seed must be an integer or None, got {seed!r}")
         messages = [dict(m) for m in messages]
         mock = mock_response if mock_response is not None else cfg.mock_response
         start = time.monotonic()
         key = None
         if self._cache is not None and mock is None:
             key = cache_key(model=cfg.model, api_base=cfg.api_base, messages=messages,
-                            temperature=cfg.temperature, max_tokens=cfg.max_tokens)
+                            temperature=temperature, max_tokens=cfg.max_tokens, seed=seed)
             stored = self._cache.get(key)
             if stored is not None:
                 hit = Completion(
@@ -303,7 +314,7 @@ class LLMClient:
                 raise error
         _import_litellm()  # seconds on first use; not part of the call's latency
         start = time.monotonic()
-        result, attempts, error = self._call_with_retries(messages, mock)
+        result, attempts, error = self._call_with_retries(messages, mock, temperature, seed)
         if error is not None:
             self._record(None, purpose=purpose, latency=time.monotonic() - start,
                          attempts=attempts, error=str(error))
@@ -314,16 +325,18 @@ class LLMClient:
         self._record(completion, purpose=purpose, latency=completion.latency_s, attempts=attempts)
         return completion
 
-    def _call_with_retries(self, messages: list[dict[str, Any]],
-                           mock: str | None) -> tuple[Any, int, LLMError | None]:
+    def _call_with_retries(self, messages: list[dict[str, Any]], mock: str | None, temperature: float,
+                           seed: int | None) -> tuple[Any, int, LLMError | None]:
         """(response, attempts, None) on success, (None, attempts, error) on final failure."""
         cfg = self.config
         litellm = _import_litellm()
         kwargs: dict[str, Any] = dict(
-            model=cfg.model, messages=messages, temperature=cfg.temperature,
+            model=cfg.model, messages=messages, temperature=temperature,
             max_tokens=cfg.max_tokens, timeout=cfg.timeout_s, api_base=cfg.api_base,
             api_key=cfg.resolved_api_key, num_retries=0,
         )
+        if seed is not None and takes_seed(cfg.model, cfg.api_base):
+            kwargs["seed"] = seed
         if mock is not None:
             kwargs["mock_response"] = mock
         total = cfg.max_retries + 1
@@ -380,6 +393,23 @@ class LLMClient:
             self._cache.put(key, record)
         except OSError as exc:  # a full disk must not throw away an answer already paid for
             _log.warning("could not write LLM cache entry: %s", exc)
+
+
+@functools.lru_cache(maxsize=64)
+def takes_seed(model: str, api_base: str | None = None) -> bool:
+    """Whether litellm passes the OpenAI ``seed`` parameter to ``model``'s provider.
+
+    True for ``openai/<alias>`` with an ``api_base`` (llama.cpp, vLLM, LM Studio: litellm sends
+    ``seed`` in the request body as OpenAI does), ``ollama/``, ``gpt-*``; False where litellm would
+    raise ``UnsupportedParamsError`` (e.g. ``anthropic/``) or does not know the model.
+    """
+    litellm = _import_litellm()
+    try:
+        name, provider, _, _ = litellm.get_llm_provider(model, api_base=api_base)
+        params = litellm.get_supported_openai_params(model=name, custom_llm_provider=provider)
+    except Exception:  # noqa: BLE001 - unknown model: do not send what it may reject
+        return False
+    return "seed" in (params or ())
 
 
 def _cost(response: Any) -> float:
