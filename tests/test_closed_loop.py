@@ -105,25 +105,87 @@ def test_unknown_verdict_replans_or_stops(server: StubLLMServer, policy: str) ->
 # ------------------------------------------------------------------------------------------------
 # 3. re-plans that differ
 # ------------------------------------------------------------------------------------------------
-def test_identical_replan_triggers_one_extra_request(server: StubLLMServer) -> None:
+def test_identical_replans_are_asked_again_hotter_with_deterministic_seeds(server: StubLLMServer) -> None:
+    """Identical twice, then a different plan: 2 extra requests, temperatures rise, the new plan runs."""
     same, other = "say('plan A')", "# a new idea\nsay('plan B')"
-    server.respond_with(Router(planner=planner_sequence(same, same, other, other, other),
+
+    def run() -> tuple[Any, list[dict[str, Any]]]:
+        server.reset()
+        server.respond_with(Router(planner=planner_sequence(same, same, same, other),
+                                   parse_completion=code(JUDGE_FALSE)))
+        result = episode(agent(server, reporter="text", attempts=2, replan_temperature=0.4))
+        return result, requests_of(server, "planner")
+
+    result, planner = run()
+    first, second = result.llm["attempts"]
+    assert len(planner) == 4  # attempt 1, then attempt 2's request and its 2 retries
+    assert [r["temperature"] for r in planner] == [0.0, 0.4, 0.7, 1.0]
+    seeds = [r.get("seed") for r in planner]
+    assert seeds[0] is None and all(isinstance(s, int) for s in seeds[1:]) and len(set(seeds[1:])) == 3
+    assert (first["temperatures"], first["seeds"], first["extra_requests"]) == ([0.0], [None], 0)
+    assert (second["temperatures"], second["seeds"], second["extra_requests"]) == ([0.4, 0.7, 1.0], seeds[1:], 2)
+    assert (second["code_differs"], second["identical_to"], second["not_run"]) == (True, None, None)
+    assert second["said"] == ["plan B"] and "plan B" in second["code"]  # the different plan ran
+    # each retry shows the failure again and asks for changed lines; retries do not pile up turns
+    for retry in planner[2:]:
+        text = retry["messages"][-1]["content"]
+        assert "identical to the plan of attempt 1" in text and "the blocks are not stacked" in text
+        assert "change at least the lines that caused the failure of attempt 1" in text
+        assert retry["messages"][-2] == {"role": "assistant", "content": code(same)}
+    assert len(planner[2]["messages"]) == len(planner[3]["messages"]) == len(planner[1]["messages"]) + 2
+    # the same episode asks with the same seeds again (reproducible where the server honours seed)
+    _, again = run()
+    assert [r.get("seed") for r in again] == seeds and [r["temperature"] for r in again] == [0.0, 0.4, 0.7, 1.0]
+
+
+def test_plan_still_identical_after_the_retries_is_not_run(server: StubLLMServer) -> None:
+    """Every answer is plan A: attempt 2 is recorded as not re-run; the scene ends where plan A ended."""
+    block = "movable small cyan block with obj_id 3"
+    plan_a = f"put_first_on_second('{block}', 'fixed orange zone with obj_id 1')\nsay('plan A ran')"
+    server.respond_with(Router(planner=code(plan_a), parse_completion=code(JUDGE_FALSE)))
+    result = episode(agent(server, reporter="text", attempts=2, replan_temperature=0.7, replan_retries=2))
+    first, second = result.llm["attempts"]
+    planner = requests_of(server, "planner")
+    assert len(planner) == 4 and [r["temperature"] for r in planner] == [0.0, 0.7, 1.0, 1.3]
+    assert first["primitives"] == 1 and first["said"] == ["plan A ran"] and first["predicate_progress"] > 0
+    assert second["not_run"] == "identical to attempt 1 after 2 retries; not re-run"
+    assert (second["code_differs"], second["identical_to"], second["extra_requests"]) == (False, 1, 2)
+    assert second["error"] is None and second["verdict_source"] is None  # failed, but neither raised nor judged
+    assert second["primitives"] == 0 and second["said"] == [] and second["api_calls"] == 0  # the sandbox never ran it
+    assert "put_first_on_second" in second["code"] and second["report"] == f"plan not run: {second['not_run']}"
+    assert len(requests_of(server, "parse_completion")) == 1  # only attempt 1 was judged
+    assert result.llm["stopped"] == "attempts used up" and result.error is None
+    # the episode ends where plan A ended (as re-running it from the reset scene would), not in the initial scene
+    assert result.progress == first["predicate_progress"] and result.primitives == 1
+
+
+def test_attempt_after_a_plan_not_run_replans_from_the_last_plan_that_ran(server: StubLLMServer) -> None:
+    same, other = "say('plan A')", "say('plan C')"
+    server.respond_with(Router(planner=planner_sequence(same, same, same, same, other),
                                parse_completion=code(JUDGE_FALSE)))
-    result = episode(agent(server, reporter="text", attempts=3, replan_temperature=0.4))
+    result = episode(agent(server, reporter="text", attempts=3, replan_retries=1))
     first, second, third = result.llm["attempts"]
     planner = requests_of(server, "planner")
-    assert len(planner) == 5  # 1 + (1 + extra) + (1 + extra)
-    assert [r["temperature"] for r in planner] == [0.0, 0.4, 0.4, 0.4, 0.4]
-    assert "identical to the plan of attempt 1" in planner[2]["messages"][-1]["content"]
-    assert (first["code_differs"], first["extra_request"]) == (None, False)
-    assert (second["code_differs"], second["identical_to"], second["extra_request"]) == (True, None, True)
-    # the model insisted on plan B in attempt 3: asked once more only, then recorded as identical
-    assert (third["code_differs"], third["identical_to"], third["extra_request"]) == (False, 2, True)
-    assert "identical to the plan of attempt 2" in planner[4]["messages"][-1]["content"]
-    # the reporter's reason and wrong objects went into the re-plan request
-    replan = planner[1]["messages"][-1]["content"]
-    assert "the blocks are not stacked" in replan and "objects whose state is wrong" in replan
-    assert "movable small cyan block with obj_id 3" in replan
+    assert len(planner) == 5  # 1 + (1 + 1 retry, not run) + (1 + 1 retry)
+    assert second["not_run"] == "identical to attempt 1 after 1 retries; not re-run"
+    assert (third["not_run"], third["code_differs"], third["extra_requests"], third["said"]) == (None, True, 1, ["plan C"])
+    # attempt 3 is shown attempt 1's plan and failure, and samples with seeds of its own
+    assert planner[3]["messages"][-1]["content"] == planner[1]["messages"][-1]["content"]
+    assert "(attempt 1) ran from the initial scene" in planner[3]["messages"][-1]["content"]
+    assert len({r["seed"] for r in planner[1:]}) == 4
+    assert [r["temperature"] for r in planner] == [0.0, 0.7, 1.0, 0.7, 1.0]
+    assert (second["code_differs"], third["identical_to"]) == (False, None)
+
+
+def test_replan_sampling_schedule() -> None:
+    from capmj.agents.planner import MAX_REPLAN_TEMPERATURE, replan_sampling
+
+    assert [replan_sampling(0.7, 10001, 2, r).temperature for r in range(5)] == [0.7, 1.0, 1.3, 1.5, 1.5]
+    assert replan_sampling(0.0, 10001, 2, 1).temperature == 0.3
+    assert replan_sampling(1.8, 10001, 2, 3).temperature == 1.8 > MAX_REPLAN_TEMPERATURE  # never below the base
+    seeds = {replan_sampling(0.7, s, k, r).seed for s in (10001, 10003) for k in (2, 3) for r in range(4)}
+    assert len(seeds) == 16 and all(0 <= s < 2**31 for s in seeds)
+    assert replan_sampling(0.7, 10001, 2, 1) == replan_sampling(0.7, 10001, 2, 1)
 
 
 def test_replan_prompt_shows_the_numbered_plan_and_the_failing_line(server: StubLLMServer) -> None:
@@ -149,7 +211,7 @@ def _attempt(k: int, verdict: bool | None, predicate: bool | None, source: str |
              differs: bool | None = None) -> dict[str, Any]:
     return {"attempt": k, "verdict": verdict, "predicate": predicate, "verdict_source": source,
             "code_differs": differs, "on_unknown": "replan" if source == "unknown" else None,
-            "extra_request": differs is False}
+            "extra_requests": 2 if differs is False else 0, "not_run": None}
 
 
 def _episode(task: str, seed: int, success: bool, attempts: list[dict[str, Any]], tokens: int) -> dict[str, Any]:
@@ -197,8 +259,14 @@ def test_loop_options_reach_the_agent_and_bad_ones_are_rejected() -> None:
 
     args = build_parser().parse_args(["--agent", "llm", "--on-unknown", "stop", "--replan-temperature", "0.3"])
     a = make_agent("llm", model="m", on_unknown=args.on_unknown, replan_temperature=args.replan_temperature)
-    assert a.on_unknown == "stop" and a.replan_config.temperature == 0.3 and a.config.temperature == 0.0
-    assert LLMAgent("m").on_unknown == "replan" and LLMAgent("m").replan_config.temperature > 0
+    assert a.on_unknown == "stop" and a.replan_temperature == 0.3 and a.config.temperature == 0.0
+    assert LLMAgent("m").on_unknown == "replan" and LLMAgent("m").replan_temperature > 0
+    assert LLMAgent("m").replan_retries == 3
+    args = build_parser().parse_args(["--agent", "llm", "--replan-retries", "0"])
+    assert make_agent("llm", model="m", replan_retries=args.replan_retries).replan_retries == 0
+    for bad in (-1, 11, 1.5, True, "2"):
+        with pytest.raises(ConfigError, match=r"replan_retries \(--replan-retries\) must be an integer from 0 to 10"):
+            LLMAgent("m", replan_retries=bad)
     with pytest.raises(ConfigError, match="replan, stop"):
         LLMAgent("m", on_unknown="ignore")
     with pytest.raises(ConfigError, match=">= 0"):

@@ -215,7 +215,9 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
     # per attempt: where the verdict came from, the predicate on the same state, whether the plan changed
     assert (first["verdict_source"], first["predicate"], first["code_differs"]) == ("code", False, None)
     assert (second["verdict_source"], second["predicate"], second["code_differs"]) == ("code", True, True)
-    assert first["temperature"] == 0.0 and second["temperature"] == 0.7
+    assert first["temperatures"] == [0.0] and second["temperatures"] == [0.7]
+    assert first["seeds"] == [None] and isinstance(second["seeds"][0], int)
+    assert "seed" not in server.requests[0] and server.requests[5]["seed"] == second["seeds"][0]
 
 
 def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:

@@ -16,7 +16,7 @@ from capmj.errors import BudgetExceeded
 from capmj.record import NullRecorder, Recorder
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.primitives import Primitives
-from capmj.sim.world import World
+from capmj.sim.world import World, WorldSnapshot
 from capmj.tasks.protocol import Scene, Task, Verdict
 
 
@@ -26,6 +26,14 @@ class Budget:
 
     max_primitives: int = 40
     max_sim_steps: int = 150_000  # 300 s of simulated time
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """The world and the attempt's placements at one moment (see :meth:`EpisodeContext.checkpoint`)."""
+
+    world: WorldSnapshot
+    placements: dict[int, tuple[Any, Any]]
 
 
 class EpisodeContext:
@@ -72,6 +80,18 @@ class EpisodeContext:
         self.attempt += 1
         self.primitives = 0
         self.placements = {}
+        self._attempt_steps0 = self.world.steps
+
+    def checkpoint(self) -> Checkpoint:
+        """The state at the end of an attempt, to return to with :meth:`restore`."""
+        return Checkpoint(self.world.snapshot(), dict(self.placements))
+
+    def restore(self, checkpoint: Checkpoint) -> None:
+        """Return to the end of an earlier attempt, within the current one (no primitive is counted):
+        an attempt whose plan is identical to that attempt's is not run again but ends where it did."""
+        self.world.restore(checkpoint.world)
+        self.prims = Primitives(self.world, self.prims.cfg)
+        self.placements = dict(checkpoint.placements)
         self._attempt_steps0 = self.world.steps
 
     # ------------------------------------------------------------------ judging

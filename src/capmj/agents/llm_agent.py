@@ -5,7 +5,9 @@ Per episode (``act``)::
     for attempt k = 1 .. attempts:
         if k > 1: ctx.reset()                      # back to the episode's initial state
         plan = planner LMP(objects, goal [, previous plan with line numbers + what happened])
-               (k > 1: at replan_temperature; a plan identical to an earlier one is asked again once)
+               (k > 1: at replan_temperature; an answer identical to an earlier plan is asked again
+                up to replan_retries times, hotter each time (planner.replan_sampling); a plan
+                still identical is not run: the scene returns to where that plan ended)
         run plan in the sandbox (API + parse_obj_name / parse_position / parse_function)
         verdict = reporter (none | text | vlm): code -> repair -> direct structured verdict -> unknown
         predicate = the task's success predicate on the same state (recorded, never shown to the LLM)
@@ -28,16 +30,16 @@ attempts.  The last attempt's error is re-raised so that the runner records it i
 from __future__ import annotations
 
 import os
-from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import attempt_facts
-from capmj.agents.base import EpisodeContext
+from capmj.agents.base import Checkpoint, EpisodeContext
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
-from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run
+from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError, LLMError, PlanError
@@ -45,8 +47,8 @@ from capmj.llm import LLMClient, LLMConfig
 from capmj.llm.client import DEFAULT_TIMEOUT_S
 from capmj.tasks.protocol import episode_rng
 
-__all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_TEMPERATURE", "LLMAgent",
-           "ON_UNKNOWN"]
+__all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_RETRIES", "DEFAULT_REPLAN_TEMPERATURE",
+           "LLMAgent", "MAX_REPLAN_RETRIES", "ON_UNKNOWN"]
 
 ON_UNKNOWN = ("replan", "stop")
 """What an unknown reporter verdict does: re-plan like a False verdict (default), or stop."""
@@ -55,14 +57,24 @@ DEFAULT_REPLAN_TEMPERATURE = 0.7
 """Sampling temperature of the planner calls of attempts 2, 3, ... (at 0 a small model repeated
 its failed plan byte for byte)."""
 
+DEFAULT_REPLAN_RETRIES = 3
+"""Requests after a re-plan answer identical to an earlier attempt's plan, before that plan is
+recorded as not re-run (the temperatures and seeds are :func:`capmj.agents.planner.replan_sampling`)."""
+MAX_REPLAN_RETRIES = 10
+"""Upper bound of ``replan_retries``: each retry is a full planner request."""
+
 ATTEMPT_FIELDS: dict[str, str] = {
     "attempt": "1, 2, ...",
     "reset": "the scene was reset to the initial state before this attempt",
-    "temperature": "sampling temperature of this attempt's planner calls",
-    "code": "the plan as it ran (after import clean-up and parse_function), None without code",
+    "temperatures": "sampling temperature of each planner request of this attempt, in order",
+    "seeds": "sampling seed sent with each planner request (None: none sent; attempt 1 sends none)",
+    "code": "the plan as it ran (after import clean-up and parse_function), None without code; "
+            "for a plan not run, the answer's code",
     "code_differs": "the plan differs from every earlier attempt's plan (None for attempt 1)",
     "identical_to": "the earliest earlier attempt with the same plan, else None",
-    "extra_request": "the first answer repeated an earlier plan and a different one was asked for",
+    "extra_requests": "planner requests made because an answer repeated an earlier attempt's plan",
+    "not_run": "why the plan was not run ('identical to attempt 1 after 3 retries; not re-run'), else None; "
+               "the scene then ends where that attempt's plan ended",
     "error": "the plan's error ('PlanError: line 3: ...'), None when it finished",
     "error_kind": "'plan' or 'llm' (only when error is set)",
     "error_line": "line of the plan the error points at, else None",
@@ -104,6 +116,7 @@ class LLMAgent:
                  plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
                  max_fn_depth: int = 3, prompts_dir: str | Path | None = None, on_unknown: str = "replan",
                  replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
+                 replan_retries: int = DEFAULT_REPLAN_RETRIES,
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
                  price: str | None = None) -> None:
         if on_unknown not in ON_UNKNOWN:
@@ -114,6 +127,10 @@ class LLMAgent:
             raise ConfigError(f"replan_temperature must be a number >= 0, got {replan_temperature!r}") from None
         if not replan_temperature >= 0:
             raise ConfigError(f"replan_temperature must be >= 0, got {replan_temperature}")
+        if isinstance(replan_retries, bool) or not isinstance(replan_retries, int) or not (
+                0 <= replan_retries <= MAX_REPLAN_RETRIES):
+            raise ConfigError(f"replan_retries (--replan-retries) must be an integer from 0 to {MAX_REPLAN_RETRIES} "
+                              f"(0: never ask again after an identical re-plan), got {replan_retries!r}")
         if reporter not in REPORTERS:
             raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
         try:
@@ -137,27 +154,25 @@ class LLMAgent:
         self.reporter = reporter
         self.attempts = attempts
         self.on_unknown = on_unknown
-        self.replan_config = replace(self.config, temperature=replan_temperature)
+        self.replan_temperature = replan_temperature
+        self.replan_retries = replan_retries
         self.plan_budget = plan_budget or DEFAULT_PLAN_BUDGET
         self.lmp_budget = lmp_budget or DEFAULT_LMP_BUDGET
         self.max_fn_depth = int(max_fn_depth)
         self.prompts_dir = Path(prompts_dir) if prompts_dir is not None else None
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
-        self.replan_client: LLMClient | None = None
 
     @property
     def model(self) -> str:
         return self.config.model
 
-    def _client(self, config: LLMConfig | None = None) -> LLMClient:
-        return LLMClient(config or self.config)
+    def _client(self) -> LLMClient:
+        return LLMClient(self.config)
 
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
-        replan_client = self.replan_client = self._client(self.replan_config)
-        clients = (client, replan_client)
         meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
@@ -165,14 +180,17 @@ class LLMAgent:
         attempts: list[dict[str, Any]] = []
         notes: dict[str, Any] = {"model": self.model, "reporter": self.reporter, "max_attempts": self.attempts,
                                  "on_unknown": self.on_unknown, "temperature": self.config.temperature,
-                                 "replan_temperature": self.replan_config.temperature, "attempts": attempts}
+                                 "replan_temperature": self.replan_temperature,
+                                 "replan_retries": self.replan_retries, "attempts": attempts}
         ctx.notes["llm"] = notes
         ctx.notes["llm_transcript"] = transcript
-        self._usage(clients, notes)
+        self._usage(client, notes)
         goal = ctx.scene.goal
         reporter = make_reporter(self.reporter, self.prompts_dir)
-        feedback: Feedback | None = None
+        feedback: Feedback | None = None  # of the last attempt whose plan ran
+        feedbacks: list[Feedback] = []
         plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
+        ends: dict[int, tuple[Checkpoint, BaseException | None]] = {}  # state and error after attempt k
         last_error: BaseException | None = None
         try:
             if reporter is not None:
@@ -181,14 +199,20 @@ class LLMAgent:
                 if k > 1:
                     ctx.reset()
                 meter.attempt = k
-                record, error, report, outcome = self._attempt(ctx, clients, transcript, k, goal, reporter,
-                                                               feedback, plans)
+                record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter,
+                                                               feedback, plans, feedbacks)
                 plans.append(outcome.key)
                 attempts.append(record)
+                if outcome.not_run is not None and outcome.identical_to in ends:
+                    # that plan, run again from the same initial state, would end where it ended
+                    checkpoint, error = ends[outcome.identical_to]
+                    ctx.restore(checkpoint)
+                elif self.attempts > 1 and not isinstance(error, LLMError):
+                    ends[k] = (ctx.checkpoint(), error)
                 last_error = error
                 unknown = error is None and report is not None and report.verdict is None
                 record["on_unknown"] = self.on_unknown if unknown else None
-                self._usage(clients, notes)
+                self._usage(client, notes)
                 self._record_attempt(ctx, record)
                 if meter.exceeded is not None:
                     notes["stopped"] = "llm budget"
@@ -197,8 +221,8 @@ class LLMAgent:
                 if isinstance(error, LLMError):
                     notes["stopped"] = "llm error"
                     break
-                failed = error is not None or (report is not None and report.verdict is False) or (
-                    unknown and self.on_unknown == "replan")
+                failed = outcome.not_run is not None or error is not None or (
+                    report is not None and report.verdict is False) or (unknown and self.on_unknown == "replan")
                 if not failed:
                     notes["stopped"] = "reporter: achieved" if report is not None and report.verdict else (
                         "reporter: unknown" if report is not None else "plan finished")
@@ -206,40 +230,34 @@ class LLMAgent:
                 if k == self.attempts:
                     notes["stopped"] = "attempts used up"
                     break
-                feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
-                                    error=record["error"], error_line=record["error_line"],
-                                    report=report.text() if report is not None else "",
-                                    scene=self._scene_summary(ctx))
+                if outcome.not_run is None:
+                    feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
+                                        error=record["error"], error_line=record["error_line"],
+                                        report=report.text() if report is not None else "",
+                                        scene=self._scene_summary(ctx))
+                    feedbacks.append(feedback)
         finally:
             if reporter is not None:
                 reporter.close()
-            self._usage(clients, notes)
+            self._usage(client, notes)
             notes["spend"] = meter.summary()
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
 
-    def _attempt(self, ctx: EpisodeContext, clients: tuple[LLMClient, LLMClient], transcript: list[LMPCall],
-                 k: int, goal: str, reporter: Any, feedback: Feedback | None, plans: list[str | None]
+    def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
+                 reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback]
                  ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
-        client, replan_client = clients
-
-        def complete(messages: list[dict[str, Any]], purpose: str = "") -> Any:
-            """Planner calls of re-plans sample at the re-plan temperature; everything else does not."""
-            use = replan_client if k > 1 and purpose.startswith("planner#") else client
-            return use.complete(messages, purpose=purpose)
-
         api = PlannerAPI(ctx)
-        metered = self.meter.wrap(complete)  # logged, counted, stopped by the episode's LLM budget
+        metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
-        before = [list(c.records) for c in clients]
+        before = len(client.records)
         record: dict[str, Any] = {
-            "attempt": k, "reset": k > 1,
-            "temperature": (replan_client if k > 1 else client).config.temperature,
-            "code": None, "code_differs": None, "identical_to": None, "extra_request": False,
+            "attempt": k, "reset": k > 1, "temperatures": [], "seeds": [],
+            "code": None, "code_differs": None, "identical_to": None, "extra_requests": 0, "not_run": None,
             "error": None, "error_line": None, "verdict": None, "verdict_source": None, "reason": "", "wrong": [],
             "reporter_errors": [], "predicate": None, "predicate_progress": None, "on_unknown": None,
             "report": "", "primitives": 0, "llm_calls": 0, "prompt_tokens": 0, "completion_tokens": 0,
@@ -247,12 +265,15 @@ class LLMAgent:
         outcome = PlanOutcome()
         error: BaseException | None = None
         report: Report | None = None
+        # re-plans: planner requests sample at replan_sampling (attempt 1 and helpers at the client's temperature)
+        sampling = partial(replan_sampling, self.replan_temperature, ctx.seed, k) if k > 1 else None
         try:
-            plan_and_run(session, goal, feedback=feedback, previous=plans, budget=self.plan_budget, outcome=outcome)
+            plan_and_run(session, goal, feedback=feedback, previous=plans, budget=self.plan_budget, outcome=outcome,
+                         retries=self.replan_retries, sampling=sampling, earlier=feedbacks)
         except Exception as exc:  # noqa: BLE001 - every failure ends this attempt, recorded
             llm_error = find_llm_error(exc)
             error = llm_error if llm_error is not None else exc
-        if not isinstance(error, LLMError):
+        if not isinstance(error, LLMError) and outcome.not_run is None:
             try:
                 ctx.world.settle(max_steps=1000)
                 if error is None and reporter is not None:
@@ -269,9 +290,15 @@ class LLMAgent:
         if k > 1 and outcome.key is not None:
             record["code_differs"] = outcome.identical_to is None
             record["identical_to"] = outcome.identical_to
-        record["extra_request"] = outcome.extra_request
+        temperature = client.config.temperature  # of requests without their own
+        record["temperatures"] = [temperature if t is None else t for t in outcome.temperatures]
+        record["seeds"] = list(outcome.seeds)
+        record["extra_requests"] = outcome.extra_requests
+        record["not_run"] = outcome.not_run
+        if outcome.not_run is not None:
+            record["report"] = f"plan not run: {outcome.not_run}"
         record["primitives"] = ctx.primitives
-        new = [r for c, old in zip(clients, before) for r in c.records[len(old):]]
+        new = client.records[before:]
         record["llm_calls"] = len(new)
         record["prompt_tokens"] = sum(r.prompt_tokens for r in new)
         record["completion_tokens"] = sum(r.completion_tokens for r in new)
@@ -329,6 +356,8 @@ class LLMAgent:
             rec.text(f"llm/attempt{k}/error", record["error"])
         verdict, source = record.get("verdict"), record.get("verdict_source")
         word = {True: "achieved", False: "not achieved", None: "unknown"}[verdict]
+        if record.get("not_run"):
+            word = f"not run: {record['not_run']}"
         if source is not None:
             word += f" (reporter verdict from {source}; task predicate: {record.get('predicate')})"
         rec.text(f"llm/attempt{k}/verdict", word + (f" (error: {record['error']})" if record.get("error") else ""))
@@ -336,9 +365,8 @@ class LLMAgent:
             rec.text(f"llm/attempt{k}/report", record["report"])
 
     @staticmethod
-    def _usage(clients: tuple[LLMClient, ...], notes: dict[str, Any]) -> None:
-        us = [c.usage() for c in clients]
-        notes.update(calls=sum(u.calls for u in us), cached_calls=sum(u.cached_calls for u in us),
-                     failed_calls=sum(u.failed_calls for u in us), prompt_tokens=sum(u.prompt_tokens for u in us),
-                     completion_tokens=sum(u.completion_tokens for u in us),
-                     cost_usd=round(sum(u.cost_usd for u in us), 8), latency_s=round(sum(u.latency_s for u in us), 3))
+    def _usage(client: LLMClient, notes: dict[str, Any]) -> None:
+        u = client.usage()
+        notes.update(calls=u.calls, cached_calls=u.cached_calls, failed_calls=u.failed_calls,
+                     prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
+                     cost_usd=round(u.cost_usd, 8), latency_s=round(u.latency_s, 3))

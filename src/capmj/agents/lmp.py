@@ -151,11 +151,12 @@ class LMPSession:
         setattr(call, part, body)
         self.recorder.text(f"llm/attempt{self.attempt}/{call.lmp}/{call.n}/{part}", body)
 
-    def ask(self, call: LMPCall, messages: list[dict[str, Any]]) -> str:
-        """Send ``messages`` (recording prompt and completion); LLMError propagates."""
+    def ask(self, call: LMPCall, messages: list[dict[str, Any]], **sampling: Any) -> str:
+        """Send ``messages`` (recording prompt and completion); LLMError propagates.  ``sampling``
+        (``temperature``, ``seed``) overrides the client's for this call."""
         self.record(call, "prompt", messages_text(messages))
         try:
-            completion = self.complete(messages, purpose=f"{call.lmp}#{call.n}")
+            completion = self.complete(messages, purpose=f"{call.lmp}#{call.n}", **sampling)
         except LLMError as exc:
             self.record(call, "error", f"{type(exc).__name__}: {exc}")
             raise

@@ -9,15 +9,19 @@ Re-planning (CapRavens re-ran the old plan first; capmj resets the scene and run
 plan): the previous completion follows as an assistant turn, then a user turn shows the plan as it
 ran *with line numbers*, what happened (the error and its failing line, or the reporter's verdict,
 reasons and the objects whose state is wrong), the object positions after it, and asks for a
-corrected complete plan.  A small model at temperature 0 answered such requests with the very
-same plan, so a re-plan that is identical (same syntax tree) to the plan of an earlier attempt is
-answered once more with a request for a *different* plan; :class:`PlanOutcome` records both.
+corrected complete plan.  A small model answered such requests with the very same plan (at
+temperature 0 always, at 0.7 still 5 of 7 times), so an answer identical (same syntax tree) to the
+plan of an earlier attempt is asked again, up to ``retries`` times, each time at the temperature and
+seed of :func:`replan_sampling` and with the failure of that attempt repeated.  A plan still
+identical after the retries is not run: the scene was reset to the same initial state and physics is
+deterministic, so it would end as that attempt did.  :class:`PlanOutcome` records all of it.
 """
 
 from __future__ import annotations
 
 import ast
-from collections.abc import Sequence
+import hashlib
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,14 +29,51 @@ from capmj.agents.lmp import LMPCall, LMPSession, object_names
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.errors import PlanError
 
-__all__ = ["DEFAULT_PLAN_BUDGET", "Feedback", "PlanOutcome", "build_messages", "feedback_text", "plan_and_run",
-           "plan_key"]
+__all__ = ["DEFAULT_PLAN_BUDGET", "MAX_REPLAN_TEMPERATURE", "REPLAN_TEMPERATURE_STEP", "Feedback", "PlanOutcome",
+           "Sampling", "build_messages", "feedback_text", "identical_text", "plan_and_run", "plan_key",
+           "replan_sampling"]
 
 DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=60.0, max_api_calls=2000, max_lines=100_000)
 """Deterministic: 100 000 executed lines (loop iterations included), 2000 API calls, the
 sandbox's element caps; physics is budgeted in simulation steps and primitives by the episode
 context.  The wall time is a backstop for the plan's own Python only: time inside API functions
 (simulation, helper LMP calls waiting on the LLM) is not counted."""
+
+
+REPLAN_TEMPERATURE_STEP = 0.3
+"""How much each retry after an identical re-plan raises the temperature (see :func:`replan_sampling`)."""
+MAX_REPLAN_TEMPERATURE = 1.5
+"""Retries never sample hotter than this (unless the re-plan temperature itself is higher)."""
+
+
+@dataclass(frozen=True)
+class Sampling:
+    """How one planner request samples: its temperature and seed."""
+
+    temperature: float
+    seed: int
+
+
+def replan_sampling(base: float, episode_seed: int, attempt: int, retry: int) -> Sampling:
+    """The sampling of request ``retry`` (0: the first request; 1, 2, ...: the retries after an
+    identical answer) of the planner in re-plan ``attempt`` (2, 3, ...).
+
+    The temperature is ``base`` (``--replan-temperature``) + :data:`REPLAN_TEMPERATURE_STEP` per
+    retry, at most :data:`MAX_REPLAN_TEMPERATURE`.  Why rising: a small model (Qwen2.5-Coder-1.5B)
+    copied the previous plan shown in the re-plan prompt 5 of 7 times even at 0.7; that copy is so
+    likely that sampling the same distribution again mostly draws it again, and flattening the
+    distribution is what makes another plan reachable.  Why capped: much above 1.5 a small model's
+    code turns to noise (misspelt API names, unbalanced brackets), which fails as surely as a copy.
+
+    The seed (the OpenAI ``seed`` parameter) is derived from the episode seed, the attempt and the
+    retry alone.  Why: without one, llama.cpp and other servers draw a random seed per request, so
+    a run could not be repeated; with it, a server that honours ``seed`` answers the same request
+    the same way (and the LLM cache key includes it), while each retry still draws anew.  31 bits:
+    valid for llama.cpp (uint32, where -1 means random) and OpenAI alike.
+    """
+    temperature = min(base + REPLAN_TEMPERATURE_STEP * retry, max(base, MAX_REPLAN_TEMPERATURE))
+    digest = hashlib.sha256(f"capmj-replan/{int(episode_seed)}/{int(attempt)}/{int(retry)}".encode()).digest()
+    return Sampling(round(temperature, 3), int.from_bytes(digest[:4], "big") & 0x7FFF_FFFF)
 
 
 @dataclass(frozen=True)
@@ -62,10 +103,17 @@ class PlanOutcome:
     key: str | None = None
     """:func:`plan_key` of the plan that ran."""
     identical_to: int | None = None
-    """The earliest earlier attempt whose plan equals the one that ran (None: it differs)."""
+    """The earliest earlier attempt whose plan equals the final answer's (None: it differs)."""
     first_identical_to: int | None = None
     """Same for the first answer, when it was identical and a different plan was asked for."""
-    extra_request: bool = False
+    extra_requests: int = 0
+    """Requests made because an answer was identical to an earlier attempt's plan."""
+    temperatures: list[float | None] = field(default_factory=list)
+    """Temperature of each planner request, in order (None: the client's configured one)."""
+    seeds: list[int | None] = field(default_factory=list)
+    """Sampling seed of each planner request, in order (None: none sent)."""
+    not_run: str | None = None
+    """Why the plan was not run (still identical to an earlier attempt's after the retries), else None."""
 
 
 def question(objects_text: str, goal: str) -> str:
@@ -89,6 +137,19 @@ def _comment(text: str) -> list[str]:
     return [f"# {line}" if line.strip() else "#" for line in text.splitlines()]
 
 
+def _failure(feedback: Feedback) -> list[str]:
+    """What went wrong in an attempt: its failing line, its error, the reporter's verdict."""
+    out = []
+    lines = feedback.code.rstrip("\n").splitlines() if feedback.code else []
+    if feedback.error_line is not None and 1 <= feedback.error_line <= len(lines):
+        out.append(f"# It failed at line {feedback.error_line}: {lines[feedback.error_line - 1].strip()}")
+    if feedback.error:
+        out += _comment(f"Error: {feedback.error}")
+    if feedback.report:
+        out += _comment(feedback.report)
+    return out
+
+
 def feedback_text(feedback: Feedback) -> str:
     """The comment block of a re-plan request (without the question)."""
     out = [f"# The plan above (attempt {feedback.attempt}) ran from the initial scene and did not achieve the goal."]
@@ -97,17 +158,21 @@ def feedback_text(feedback: Feedback) -> str:
         width = len(str(len(lines)))
         out.append("# The plan as it ran, with line numbers:")
         out += [f"# {i:>{width}}| {line}" for i, line in enumerate(lines, start=1)]
-        if feedback.error_line is not None and 1 <= feedback.error_line <= len(lines):
-            failing = lines[feedback.error_line - 1].strip()
-            out.append(f"# It failed at line {feedback.error_line}: {failing}")
-    if feedback.error:
-        out += _comment(f"Error: {feedback.error}")
-    if feedback.report:
-        out += _comment(feedback.report)
+    out += _failure(feedback)
     if feedback.scene:
         out += _comment(feedback.scene)
     out.append("# The scene has been reset to its initial state. Write a corrected complete plan for the same goal: "
                "fix what went wrong, do not repeat the plan above.")
+    return "\n".join(out)
+
+
+def identical_text(attempt: int, failed: Feedback | None) -> str:
+    """The comment block of a retry after an answer identical to the plan of ``attempt``; its
+    failure (``failed``: that attempt's feedback, when known) is shown again."""
+    out = [f"# The plan above is identical to the plan of attempt {attempt}, which did not achieve the goal."]
+    out += _failure(failed) if failed is not None else []
+    out.append("# Running it again would fail the same way. Write a different complete plan: change at least "
+               f"the lines that caused the failure of attempt {attempt}.")
     return "\n".join(out)
 
 
@@ -125,34 +190,59 @@ def build_messages(session: LMPSession, goal: str, feedback: Feedback | None = N
 
 def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = None,
                  previous: Sequence[str | None] = (), budget: SandboxBudget = DEFAULT_PLAN_BUDGET,
-                 outcome: PlanOutcome | None = None) -> PlanOutcome:
+                 outcome: PlanOutcome | None = None, retries: int = 0,
+                 sampling: Callable[[int], Sampling] | None = None, earlier: Sequence[Feedback] = ()
+                 ) -> PlanOutcome:
     """Ask for a plan and run it.  Raises LLMError (provider) or PlanError (code); ``outcome``
     (when given) holds the completion and executed code even then.
 
     ``previous`` are the :func:`plan_key` of the plans of attempts 1, 2, ...; an answer equal to
-    one of them is asked once more for a different plan (and the second answer is used)."""
+    one of them is asked again, up to ``retries`` times, showing that attempt's failure again (its
+    :class:`Feedback` among ``earlier``, else ``feedback``).  ``sampling(r)`` gives request r's
+    temperature and seed (r = 0 the first request; without it the client's own are used).  A plan
+    still identical after the retries is not run (``outcome.not_run`` says why)."""
     out = outcome if outcome is not None else PlanOutcome()
+
+    def ask(call: LMPCall, messages: list[dict[str, Any]]) -> str:
+        chosen = sampling(len(out.temperatures)) if sampling is not None else None
+        out.temperatures.append(chosen.temperature if chosen is not None else None)
+        out.seeds.append(chosen.seed if chosen is not None else None)
+        if chosen is None:
+            return session.ask(call, messages)
+        return session.ask(call, messages, temperature=chosen.temperature, seed=chosen.seed)
+
+    def same_as(key: str) -> int | None:
+        return list(previous).index(key) + 1 if key in previous else None
+
     call = session.next_call("planner", goal)
     out.call = call
     messages = build_messages(session, goal, feedback)
-    out.completion = session.ask(call, messages)
+    out.completion = ask(call, messages)
     out.key = plan_key(out.completion)
-    if out.key in previous:
-        out.first_identical_to = list(previous).index(out.key) + 1
-        out.extra_request = True
+    identical = out.first_identical_to = same_as(out.key)
+    while identical is not None and out.extra_requests < retries:
+        out.extra_requests += 1
         session.recorder.text(f"llm/attempt{session.attempt}/planner/{call.n}/identical_to",
-                              f"identical to the plan of attempt {out.first_identical_to}; asking for a different plan")
-        messages = messages + [
+                              f"identical to the plan of attempt {identical}; asking for a different plan "
+                              f"(retry {out.extra_requests} of {retries})")
+        failed = next((f for f in earlier if f.attempt == identical), feedback)
+        again = messages + [
             {"role": "assistant", "content": out.completion},
-            {"role": "user", "content": (
-                f"# This plan is identical to the plan of attempt {out.first_identical_to}, which did not achieve "
-                "the goal. Write a different complete plan that fixes what went wrong.\n"
-                f"{question(session.objects_text(), goal)}\n")},
+            {"role": "user", "content": f"{identical_text(identical, failed)}\n{question(session.objects_text(), goal)}\n"},
         ]
         call = out.call = session.next_call("planner", goal)
-        out.completion = session.ask(call, messages)
+        out.completion = ask(call, again)
         out.key = plan_key(out.completion)
-    out.identical_to = list(previous).index(out.key) + 1 if out.key in previous else None
+        identical = same_as(out.key)
+    out.identical_to = identical
+    if identical is not None:
+        out.not_run = f"identical to attempt {identical} after {out.extra_requests} retries; not re-run"
+        try:
+            out.code = extract_code(out.completion)
+        except PlanError:
+            out.code = None
+        session.record(call, "result", f"plan not run: {out.not_run}")
+        return out
     env = session.plan_env()
     env["objects"] = object_names(session.objects_text()) or []
     env["goal"] = goal

@@ -25,7 +25,7 @@ TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
-               "timeout_s", "cache_dir", "cache_only", "episode_max_tokens", "episode_max_cost_usd",
+               "replan_retries", "timeout_s", "cache_dir", "cache_only", "episode_max_tokens", "episode_max_cost_usd",
                "price")
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
@@ -79,6 +79,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="what an unknown reporter verdict does (default: replan)")
     g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
                    help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
+    g.add_argument("--replan-retries", dest="replan_retries", type=int, default=None, metavar="N",
+                   help="requests after a re-plan identical to an earlier plan, each hotter, before that plan is "
+                        "recorded as not re-run (default: 3; 0-10)")
     g.add_argument("--llm-timeout", dest="timeout_s", type=float, default=None, metavar="S",
                    help="seconds per LLM request before it is retried (default 300: slow local servers)")
     g.add_argument("--llm-cache", dest="cache_dir", default=None, metavar="DIR",

@@ -60,7 +60,7 @@ GENERATED_NUMBERS: dict[str, int] = {
 }
 """The thesis's numbers of the generated tasks (Tables 5.3 and 5.4): their rows' order and labels."""
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
