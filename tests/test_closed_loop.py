@@ -245,10 +245,25 @@ def test_reporter_agreement_counts_match_hand_made_outcomes() -> None:
     assert summary["overall"]["llm m"]["successes"] == 1
     md = markdown(summary)
     assert "## Closed loop" in md
-    assert "| **Overall** | llm m | 1/3 (33 %) | 2.00 | 4/5 (80 %) | 3/0/1/1 | 2/4 (50 %) | 1 | 1 | 1/3 (33 %) | 210 |" in md
+    assert (overall["not_rerun"], overall["extra_requests"]) == (0, 2)
+    assert ("| **Overall** | llm m | 1/3 (33 %) | 2.00 | 4/5 (80 %) | 3/0/1/1 | 2/4 (50 %) | 1 | 1 | 1/3 (33 %) | 0 | 2 "
+            "| 210 |") in md
     # non-LLM results have no closed-loop statistics and no table
     oracle = [{**r, "agent": "oracle", "model": None, "llm": {}} for r in records]
     assert "loop" not in summarize(oracle)["overall"]["oracle"] and "Closed loop" not in markdown(summarize(oracle))
+
+
+def test_plans_not_rerun_and_extra_requests_are_counted() -> None:
+    not_run = {**_attempt(2, None, None, source=None, differs=False), "extra_requests": 3,
+               "not_run": "identical to attempt 1 after 3 retries; not re-run"}
+    old = {**_attempt(2, False, False, differs=True), "extra_request": True}  # a record from before retries
+    del old["extra_requests"], old["not_run"]
+    records = [_episode("A", 1, False, [_attempt(1, False, False), not_run], 100),
+               _episode("A", 3, False, [_attempt(1, False, False), old], 100)]
+    loop = summarize(records)["overall"]["llm m"]["loop"]
+    assert (loop["replans"], loop["identical_replans"], loop["not_rerun"], loop["extra_requests"]) == (2, 1, 1, 4)
+    assert loop["reporter_runs"] == 3  # the plan not run was not judged
+    assert "| 1/2 (50 %) | 1 | 4 | 110 |" in markdown(summarize(records))
 
 
 def test_loop_options_reach_the_agent_and_bad_ones_are_rejected() -> None:

@@ -299,3 +299,15 @@ def test_export_round_trips_and_matches_the_call_count(run_a: Path, tmp_path: Pa
     assert all("put_first_on_second(blocks[0]" in p["messages"][-1]["content"] for p in plans)
     assert main(["export", str(run_a), "--only-success", "--messages-only", "--out", str(out)]) == 0
     assert out.read_text() == ""
+
+
+@pytest.mark.parametrize("label", ["unknown_object", "helper_lmp"])
+def test_label_of_an_episode_whose_last_plan_was_not_rerun_is_that_of_the_attempt_it_repeats(
+        server: StubLLMServer, label: str) -> None:
+    handlers = {"parse_obj_name": code("ret_val = [")} if label == "helper_lmp" else {}
+    got, rec = label_of(server, CHEAP[label], handlers=handlers, attempts=2, replan_retries=1)
+    first, second = rec["llm"]["attempts"]
+    assert second["not_run"] == "identical to attempt 1 after 1 retries; not re-run"
+    assert first["error"] and second["error"] is None
+    assert rec["error"] == first["error"]  # the episode ends as attempt 1 did
+    assert got == label, (rec["error"], rec["llm"]["attempts"])

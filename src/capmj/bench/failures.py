@@ -15,6 +15,8 @@ documented with examples in ``docs/failures.md``; in short:
    ``budget`` (wall time, lines, elements, API calls, primitives, simulation steps),
    ``unknown_object``, ``motion`` (unreachable / no grip / wrong object picked), ``api_misuse``
    (an API function rejected its arguments), ``plan_exception`` (the plan's own code raised).
+   A last attempt whose plan was not run (identical to attempt j's, see docs/llm.md) is classified
+   as attempt j, where its episode ended.
 6. The last attempt ran cleanly but the predicate is false:
    ``reporter_false_positive`` when the reporter's "achieved" ended the loop with attempts left,
    ``physics`` when an object the last attempt placed ended more than :data:`DRIFT_TOL_M` from
@@ -100,6 +102,9 @@ def classify(rec: Mapping[str, Any]) -> str | None:
         if a.get("verdict") is False and _predicate(a) is True:
             return "reporter_false_negative"
     last = attempts[-1] if attempts else None
+    same = last.get("identical_to") if last is not None and last.get("not_run") else None
+    if isinstance(same, int) and 1 <= same < len(attempts):
+        last = attempts[same - 1]  # a plan not re-run ends the episode as that attempt's plan did
     if last is not None and last.get("error_kind") == "llm" or (error and str(error).startswith("LLMError")):
         return "llm_error"
     last_error = (last or {}).get("error") or error

@@ -177,10 +177,12 @@ def _loop_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[
            "Per attempt: *verdict* = the reporter reached True/False (of the attempts it judged; a plan that "
            "raised is not judged); *agreement* = verdicts equal to the task predicate on the same state, with "
            "false positives (said achieved, was not) and false negatives; *identical re-plans* = attempts 2+ "
-           "whose plan equals an earlier one. See docs/llm.md.", "",
+           "whose plan still equals an earlier one after the retries (*not re-run*: of these, not run again); "
+           "*extra requests* = planner requests made because an answer repeated an earlier plan. "
+           "See docs/llm.md.", "",
            "| Task | Configuration | success | attempts/ep | verdict | sources code/repair/direct/unknown "
-           "| agreement | FP | FN | identical re-plans | tokens/ep |",
-           "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
+           "| agreement | FP | FN | identical re-plans | not re-run | extra requests | tokens/ep |",
+           "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
     for t, per in rows:
         for lab in labels:
             st = per.get(lab) or {}
@@ -194,7 +196,7 @@ def _loop_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[
                        f"{src['code']}/{src['repair']}/{src['direct']}/{src['unknown']} | "
                        f"{_count_cell(lp['agree'], lp['compared'])} | {lp['false_positives']} | "
                        f"{lp['false_negatives']} | {_count_cell(lp['identical_replans'], lp['replans'])} | "
-                       f"{lp['mean_tokens']:.0f} |")
+                       f"{lp['not_rerun']} | {lp['extra_requests']} | {lp['mean_tokens']:.0f} |")
     return out
 
 

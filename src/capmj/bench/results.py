@@ -173,6 +173,13 @@ def _share(k: int, n: int) -> float | None:
     return k / n if n else None
 
 
+def _extra_requests(attempt: Mapping[str, Any]) -> int:
+    n = attempt.get("extra_requests")
+    if isinstance(n, int) and not isinstance(n, bool):
+        return n
+    return int(bool(attempt.get("extra_request")))  # records written before retries: one at most
+
+
 def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     """The closed loop of LLM episodes (``record["llm"]["attempts"]``); None without any.
 
@@ -182,7 +189,10 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     but predicate True; ``agreement`` = agree / compared.  ``verdict_rate`` = attempts whose
     reporter reached True/False / attempts in which a reporter ran (a plan that raised is not
     judged).  ``identical_replans`` counts attempts 2, 3, ... whose plan equals an earlier
-    attempt's plan (after the extra request).  Tokens are prompt + completion per episode.
+    attempt's plan (after the retries), ``not_rerun`` those of them that were therefore not run,
+    ``extra_requests`` the planner requests made because an answer repeated an earlier plan (records
+    written before retries existed count their ``extra_request`` flag as one).  Tokens are prompt +
+    completion per episode.
     """
     eps = [r for r in records if isinstance((r.get("llm") or {}).get("attempts"), list)]
     if not eps:
@@ -222,7 +232,8 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
         "replans": len(replans),
         "identical_replans": identical,
         "identical_replan_rate": _share(identical, len(replans)),
-        "extra_requests": sum(bool(a.get("extra_request")) for a in attempts),
+        "not_rerun": sum(bool(a.get("not_run")) for a in replans),
+        "extra_requests": sum(_extra_requests(a) for a in attempts),
         "tokens_total": sum(prompt) + sum(completion),
         "mean_tokens": (sum(prompt) + sum(completion)) / n,
         "mean_prompt_tokens": sum(prompt) / n,
