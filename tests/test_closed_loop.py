@@ -288,3 +288,18 @@ def test_loop_options_reach_the_agent_and_bad_ones_are_rejected() -> None:
         LLMAgent("m", replan_temperature=-1)
     with pytest.raises(SystemExit):
         build_parser().parse_args(["--on-unknown", "success"])
+
+
+@pytest.mark.parametrize("value", ["-1", "11"])
+def test_bad_replan_retries_flag_is_a_one_line_error_before_anything_runs(value: str, tmp_path: Any,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    from capmj.bench.cli import main
+
+    out = tmp_path / "run"
+    rc = main(["--agent", "llm", "--model", "openai/stub", "--api-base", "http://127.0.0.1:9/v1",
+               "--tasks", "stack-all-blocks-on-a-zone", "--seeds", "10001", "--replan-retries", value,
+               "--out", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert "capmj-bench: error: replan_retries (--replan-retries) must be an integer from 0 to 10" in err
+    assert f"got {value}" in err and not out.exists()
