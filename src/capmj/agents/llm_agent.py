@@ -54,8 +54,9 @@ ON_UNKNOWN = ("replan", "stop")
 """What an unknown reporter verdict does: re-plan like a False verdict (default), or stop."""
 
 DEFAULT_REPLAN_TEMPERATURE = 0.7
-"""Sampling temperature of the planner calls of attempts 2, 3, ... (at 0 a small model repeated
-its failed plan byte for byte)."""
+"""Sampling temperature of the first planner request of attempts 2, 3, ... (at 0 a small model
+repeated its failed plan byte for byte); retries after an identical answer go hotter
+(:func:`capmj.agents.planner.replan_sampling`)."""
 
 DEFAULT_REPLAN_RETRIES = 3
 """Requests after a re-plan answer identical to an earlier attempt's plan, before that plan is

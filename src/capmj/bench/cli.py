@@ -81,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
     g.add_argument("--replan-retries", dest="replan_retries", type=int, default=None, metavar="N",
                    help="requests after a re-plan identical to an earlier plan, each hotter, before that plan is "
-                        "recorded as not re-run (default: 3; 0-10)")
+                        "recorded as not re-run (default: 3)")
     g.add_argument("--llm-timeout", dest="timeout_s", type=float, default=None, metavar="S",
                    help="seconds per LLM request before it is retried (default 300: slow local servers)")
     g.add_argument("--llm-cache", dest="cache_dir", default=None, metavar="DIR",
