@@ -30,15 +30,16 @@ error, simulated time) for the episode log.
 from __future__ import annotations
 
 import difflib
-import math
 import re
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, WORKSPACE, Footprints
+from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, Footprints
+from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
+from capmj.sim.pose import quat_euler_xyz, quat_yaw, wxyz
 from capmj.tasks.protocol import episode_rng
 
 CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
@@ -48,22 +49,10 @@ _SIDES_UV = ((0.5, 1.0), (1.0, 0.5), (0.5, 0.0), (0.0, 0.5))
 
 
 def denormalize_uv(u: float, v: float) -> tuple[float, float]:
-    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image."""
-    return 0.75 - 0.5 * float(v), -0.5 + float(u)
-
-
-def _xyzw_yaw(q: Sequence[float]) -> float:
-    x, y, z, w = (float(v) for v in q)
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
-def _euler_xyz(q_xyzw: Sequence[float]) -> list[float]:
-    """Roll, pitch, yaw (rad) of an (x, y, z, w) quaternion, as PyBullet's getEulerFromQuaternion."""
-    x, y, z, w = (float(v) for v in q_xyzw)
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return [roll, pitch, yaw]
+    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image
+    (x = 0.75 − 0.5 v, y = −0.5 + u on :data:`capmj.sim.bounds.WORKSPACE`)."""
+    w = WORKSPACE
+    return w.xmax - (w.xmax - w.xmin) * float(v), w.ymin + (w.ymax - w.ymin) * float(u)
 
 
 def _is_number(v: Any) -> bool:
@@ -253,7 +242,7 @@ class PlannerAPI:
 
         def get_obj_pos_dict() -> dict[str, tuple[list[float], list[float]]]:
             """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
-            return {o.name: ([float(v) for v in api._pos(o.obj_id)], _euler_xyz(api._xquat(o.obj_id)))
+            return {o.name: ([float(v) for v in api._pos(o.obj_id)], quat_euler_xyz(wxyz(api._xquat(o.obj_id))))
                     for o in api._objects()}
 
         def get_obj_positions_np(names) -> np.ndarray:
@@ -380,7 +369,7 @@ class PlannerAPI:
         if area is None and targ is not None and _is_vector(targ, (4,)):
             area, targ = targ, None  # the original accepted the search area as the first argument
         if area is None:
-            area = WORKSPACE
+            area = WORKSPACE.xyxy
         if not _is_vector(area, (4,)):
             raise ValueError(f"area must be (xmin, ymin, xmax, ymax) in metres, got {_summary(area, 80)}")
         if not r >= 0:
@@ -440,7 +429,7 @@ class PlannerAPI:
             if isinstance(target, (list, tuple)) and len(target) == 1:
                 target = target[0]  # the original API's one-element position lists
             if _is_pose(target):
-                yaw = _xyzw_yaw(target[1])
+                yaw = quat_yaw(wxyz(target[1]))
                 target = target[0]
             if not _is_vector(target):
                 raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
@@ -460,4 +449,4 @@ class PlannerAPI:
 
 
 # the geometry constants are re-exported: callers and benchmarks import them from here
-__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "PlannerAPI", "REACH_RADIUS", "TILTED", "WORKSPACE", "denormalize_uv"]
+__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "PlannerAPI", "REACH_RADIUS", "TILTED", "denormalize_uv"]

@@ -14,6 +14,7 @@ import numpy as np
 
 from capmj.agents.base import EpisodeContext
 from capmj.errors import AgentError
+from capmj.sim.bounds import WORKSPACE
 from capmj.tasks.protocol import OracleGoal, Target
 from capmj.tasks.spawn import free_positions
 
@@ -93,7 +94,7 @@ class OracleAgent:
         for _, oid in sorted(blockers):
             state = w.state()
             current = [o.moved(state.poses[o.obj_id].pos) for o in w.objects if o.obj_id != oid]
-            spot = free_positions(current, (0.25, 0.75, -0.5, 0.5), [w.by_id[oid].footprint_radius],
+            spot = free_positions(current, WORKSPACE.xy, [w.by_id[oid].footprint_radius],
                                   reserved=[((tx, ty), 0.08)])[0]
             res = ctx.pick_and_place(np.asarray(w.pose(oid).pos), np.array(spot))
             if not res.ok:

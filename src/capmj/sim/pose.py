@@ -36,6 +36,34 @@ def quat_to_mat(quat: Sequence[float]) -> np.ndarray:
     ])
 
 
+def quat_yaw(quat: Sequence[float]) -> float:
+    """Yaw of a (w, x, y, z) quaternion: :func:`mat_yaw` of :func:`quat_to_mat`."""
+    return mat_yaw(quat_to_mat(quat))
+
+
+def quat_euler_xyz(quat: Sequence[float]) -> list[float]:
+    """Roll, pitch, yaw (rad) of a (w, x, y, z) quaternion, as PyBullet's ``getEulerFromQuaternion``
+    (extrinsic x, y, z).  Written out from the quaternion, in the terms capmj has always used, so
+    the planner sees the same bits (a pitch of exactly 0 stays +0.0)."""
+    w, x, y, z = (float(v) for v in quat)
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return [roll, pitch, yaw]
+
+
+def xyzw(quat: Sequence[float]) -> tuple[float, float, float, float]:
+    """A (w, x, y, z) quaternion reordered as (x, y, z, w): the planner API's, rerun's and Ravens' order."""
+    w, x, y, z = (float(v) for v in quat)
+    return (x, y, z, w)
+
+
+def wxyz(quat: Sequence[float]) -> tuple[float, float, float, float]:
+    """An (x, y, z, w) quaternion reordered as (w, x, y, z): MuJoCo's order."""
+    x, y, z, w = (float(v) for v in quat)
+    return (w, x, y, z)
+
+
 def mat_to_quat(mat: np.ndarray) -> np.ndarray:
     """Unit quaternion of a 3×3 rotation matrix (``mju_mat2Quat``)."""
     quat = np.empty(4)
@@ -58,6 +86,25 @@ def lookat_quat(pos: Sequence[float], target: Sequence[float]) -> np.ndarray:
     return mat_to_quat(np.column_stack([right, up, -f]))
 
 
+def from_frame_2d(uv: Sequence[float] | np.ndarray, yaw: float,
+                  origin: Sequence[float] | np.ndarray = (0.0, 0.0)) -> np.ndarray:
+    """Points ``(..., 2)`` given in a planar frame at ``origin`` turned by ``yaw``, in world
+    coordinates: ``origin + R(yaw) uv``, summed as ``ox + c u − s v`` (left to right)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    p = np.asarray(uv, dtype=float)
+    o = np.asarray(origin, dtype=float)
+    return np.stack([o[0] + c * p[..., 0] - s * p[..., 1], o[1] + s * p[..., 0] + c * p[..., 1]], axis=-1)
+
+
+def to_frame_2d(xy: Sequence[float] | np.ndarray, yaw: float,
+                origin: Sequence[float] | np.ndarray = (0.0, 0.0)) -> np.ndarray:
+    """World points ``(..., 2)`` in the planar frame at ``origin`` turned by ``yaw``:
+    ``R(yaw)ᵀ (xy − origin)``, the inverse of :func:`from_frame_2d`."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    d = np.asarray(xy, dtype=float) - np.asarray(origin, dtype=float)
+    return np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]], axis=-1)
+
+
 def rotate_2d(xy: Sequence[float] | np.ndarray, yaw: float) -> np.ndarray:
     """Points ``(..., 2)`` rotated by ``yaw`` about the origin, counter-clockwise."""
     c, s = math.cos(yaw), math.sin(yaw)
@@ -65,4 +112,5 @@ def rotate_2d(xy: Sequence[float] | np.ndarray, yaw: float) -> np.ndarray:
     return np.stack([c * p[..., 0] - s * p[..., 1], s * p[..., 0] + c * p[..., 1]], axis=-1)
 
 
-__all__ = ["lookat_quat", "mat_to_quat", "mat_yaw", "quat_to_mat", "rotate_2d", "yaw_quat"]
+__all__ = ["from_frame_2d", "lookat_quat", "mat_to_quat", "mat_yaw", "quat_euler_xyz", "quat_to_mat", "quat_yaw",
+           "rotate_2d", "to_frame_2d", "wxyz", "xyzw", "yaw_quat"]

@@ -16,7 +16,9 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, ZONE_SIZE, ObjectSpec
+from capmj.sim.pose import from_frame_2d, to_frame_2d
 from capmj.sim.state import SceneState
 
 PLANE_TOL = 0.01
@@ -34,12 +36,15 @@ STACK_AXIS_TOL = 0.02
 MOVE_TOL = 0.03
 """An object "did not move" when its centre ends within this distance (m) of its start."""
 
-WORKSPACE_X = (0.25, 0.75)
-WORKSPACE_Y = (-0.5, 0.5)
-WORKSPACE_Z = (0.0, 0.3)
+WORKSPACE_X = (WORKSPACE.xmin, WORKSPACE.xmax)
+WORKSPACE_Y = (WORKSPACE.ymin, WORKSPACE.ymax)
+WORKSPACE_Z = (WORKSPACE.zmin, WORKSPACE.zmax)
+"""The workspace's ranges (m), from :data:`capmj.sim.bounds.WORKSPACE`."""
 
-_AREA_X = {"top": (0.25, 0.5), "bottom": (0.5, 0.75)}
-_AREA_Y = {"left": (-0.5, 0.0), "right": (0.0, 0.5)}
+_SPLIT_X, _SPLIT_Y = WORKSPACE.center
+"""The lines that halve the workspace: x = 0.5 (top | bottom) and y = 0 (left | right)."""
+_AREA_X = {"top": (WORKSPACE.xmin, _SPLIT_X), "bottom": (_SPLIT_X, WORKSPACE.xmax)}
+_AREA_Y = {"left": (WORKSPACE.ymin, _SPLIT_Y), "right": (_SPLIT_Y, WORKSPACE.ymax)}
 AREA_NAMES: tuple[str, ...] = (
     "top", "bottom", "left", "right", "top left", "top right", "bottom left", "bottom right",
 )
@@ -79,7 +84,7 @@ def in_area(pos: Sequence[float], area: str | tuple[float, float, float, float])
     """
     b = area_bounds(area) if isinstance(area, str) else area
     x, y = float(pos[0]), float(pos[1])
-    return _in_closed_or_split(x, b[0], b[1], 0.5) and _in_closed_or_split(y, b[2], b[3], 0.0)
+    return _in_closed_or_split(x, b[0], b[1], _SPLIT_X) and _in_closed_or_split(y, b[2], b[3], _SPLIT_Y)
 
 
 def _in_closed_or_split(v: float, lo: float, hi: float, split: float) -> bool:
@@ -91,11 +96,7 @@ def _in_closed_or_split(v: float, lo: float, hi: float, split: float) -> bool:
 # --------------------------------------------------------------------------------------- zones
 def zone_local_xy(state: SceneState, zone_id: int, xy: Sequence[float]) -> np.ndarray:
     """``xy`` expressed in the zone's frame (origin at its centre, axes along its sides)."""
-    c = state.pos(zone_id)[:2]
-    yaw = state.poses[zone_id].yaw
-    d = np.asarray(xy[:2], dtype=float) - c
-    cs, sn = math.cos(yaw), math.sin(yaw)
-    return np.array([cs * d[0] + sn * d[1], -sn * d[0] + cs * d[1]])
+    return to_frame_2d(xy[:2], state.poses[zone_id].yaw, state.pos(zone_id)[:2])
 
 
 def zone_half_size(spec: ObjectSpec) -> float:
@@ -308,8 +309,7 @@ def is_grid(
     v = p[nn] - p
     ang = np.arctan2(v[:, 1], v[:, 0])
     theta = math.atan2(np.sin(4 * ang).sum(), np.cos(4 * ang).sum()) / 4
-    cs, sn = math.cos(theta), math.sin(theta)
-    local = np.column_stack([cs * p[:, 0] + sn * p[:, 1], -sn * p[:, 0] + cs * p[:, 1]])
+    local = to_frame_2d(p, theta)
     reasons = []
     for r_, c_, lc in ((rows, cols, local), (cols, rows, local[:, ::-1]),
                        (rows, cols, local[:, ::-1]), (cols, rows, local)):
@@ -349,10 +349,7 @@ def _pose_match(state: SceneState, obj_id: int, goal, target) -> bool:
     t = target.pos
     if goal.metric == "zone":
         half = goal.zone_size / 2
-        d = p[:2] - np.asarray(t[:2], dtype=float)
-        yaw = target.yaw or 0.0
-        cs, sn = math.cos(yaw), math.sin(yaw)
-        lx, ly = cs * d[0] + sn * d[1], -sn * d[0] + cs * d[1]
+        lx, ly = to_frame_2d(p[:2], target.yaw or 0.0, t[:2])
         return abs(lx) <= half and abs(ly) <= half
     if math.hypot(p[0] - t[0], p[1] - t[1]) > goal.tolerance or abs(p[2] - t[2]) > Z_TOL:
         return False
@@ -571,14 +568,11 @@ def fixture_slots(origin: Sequence[float], yaw: float, clearance: float = 0.0) -
     neighbours, and stays well within ``SLOT_TOL`` of the slot centre.
     """
     o = np.asarray(origin, dtype=float)
-    cs, sn = math.cos(yaw), math.sin(yaw)
     shift = ((1, 1), (2, 1), (1, 2))
     z = float(o[2]) - FIXTURE_HEIGHT / 2 + FIXTURE_SLOT / 2
-    out = []
-    for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift):
-        u, v = u + clearance * du, v + clearance * dv
-        out.append((o[0] + cs * u - sn * v, o[1] + sn * u + cs * v, z))
-    return np.array(out)
+    uv = [(u + clearance * du, v + clearance * dv) for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift)]
+    xy = from_frame_2d(uv, yaw, o[:2])
+    return np.column_stack([xy, np.full(len(xy), z)])
 
 
 def slot_occupants(state: SceneState, fixture_id: int, ids: Iterable[int], tol: float = SLOT_TOL) -> list[int | None]:
@@ -624,9 +618,7 @@ def footprint(state: SceneState, obj_id: int):
     if pose.tilt > TILT_TOL:
         ext = np.abs(pose.rotation) @ np.array([hx, hy, hz])
         return box(c[0] - ext[0], c[1] - ext[1], c[0] + ext[0], c[1] + ext[1])
-    cs, sn = math.cos(pose.yaw), math.sin(pose.yaw)
-    corners = [(c[0] + cs * u - sn * v, c[1] + sn * u + cs * v) for u, v in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
-    return Polygon(corners)
+    return Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], pose.yaw, c[:2]))
 
 
 def footprint_outside_zone(state: SceneState, obj_id: int, zone_id: int) -> float:
