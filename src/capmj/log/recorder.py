@@ -33,6 +33,7 @@ from capmj.log.images import SceneCameras, depth_mm, image_entity
 from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
                              SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
 from capmj.log.summary import fmt_vec, jsonable, summary_markdown
+from capmj.sim.pose import xyzw
 
 if TYPE_CHECKING:
     from capmj.sim.objects import ObjectSpec
@@ -134,7 +135,7 @@ class RerunRecorder:
                 self._static_bodies.add(o.body)
                 self._sent[o.body] = np.concatenate([world.data.xpos[b], world.data.xquat[b]])
                 self.rec.log(f"{OBJECTS}/{o.body}", rr.Transform3D(
-                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=G.xyzw(world.data.xquat[b]))),
+                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=xyzw(world.data.xquat[b]))),
                     static=True)
         m = world.model
         objs = {o.body for o in world.objects}
@@ -183,7 +184,7 @@ class RerunRecorder:
             self.rec.send_columns(ent, indexes=self._index(rows, final_label),
                                   columns=rr.Transform3D.columns(
                                       translation=np.array([r[2][0] for r in rows], dtype=np.float32),
-                                      quaternion=np.array([G.xyzw(r[2][1]) for r in rows], dtype=np.float32)))
+                                      quaternion=np.array([xyzw(r[2][1]) for r in rows], dtype=np.float32)))
 
     def _changed_rows(self, key: str, rows: list) -> list:
         """The rows whose pose differs from the last one sent for ``key`` (latest-at fills the gaps)."""
