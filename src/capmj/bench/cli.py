@@ -270,7 +270,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         load_json,
         read_results,
         summarize,
-        write_json_atomic,
+        write_result_json,
     )
 
     # ---- the result folder and what an earlier run left there
@@ -334,7 +334,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         "resumed_at": list((stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
                                                                       if args.resume else []),
     }
-    write_json_atomic(out / CONFIG, config)
+    write_result_json(out / CONFIG, config)
 
     # ---- the episodes still to run
     existing, bad = read_results(out / EPISODES)

@@ -25,7 +25,6 @@ when fusing heightmaps (capmj's cameras are Ravens-like, not Ravens' exact poses
 from __future__ import annotations
 
 import json
-import os
 import pickle
 import re
 from dataclasses import dataclass
@@ -34,6 +33,7 @@ from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from capmj.atomic import atomic_write
 from capmj.errors import ConfigError
 from capmj.sim import pose as sim_pose
 from capmj.sim.pose import wxyz, xyzw
@@ -156,10 +156,8 @@ def write_episode(directory: Path, name: str, record: Mapping[str, Any]) -> None
     for field in FIELDS:
         (directory / field).mkdir(parents=True, exist_ok=True)
         target = directory / field / name
-        tmp = target.with_suffix(".tmp")
-        with open(tmp, "wb") as fh:
+        with atomic_write(target, "wb") as fh:
             pickle.dump(record[field], fh, protocol=PICKLE_PROTOCOL)
-        os.replace(tmp, target)
 
 
 def resume_point(directory: Path) -> tuple[int, int | None]:
