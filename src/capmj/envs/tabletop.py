@@ -38,7 +38,7 @@ from capmj.errors import AgentError, BudgetExceeded, ConfigError
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.robot import ARM_JOINTS
 from capmj.sim.bounds import WORKSPACE
-from capmj.sim.cameras import IMAGE_H, IMAGE_W
+from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
 from capmj.sim.pose import mat_yaw
 from capmj.sim.scene import HEIGHTMAP_PIXEL
 from capmj.sim.world import World
@@ -59,7 +59,7 @@ class EnvConfig:
     ``max_steps`` attribute if it has one, else the bench's primitive budget (:class:`Budget`).
     """
 
-    cameras: tuple[str, ...] = ("front", "left", "right")
+    cameras: tuple[str, ...] = VIEW_CAMERAS
     width: int = IMAGE_W
     height: int = IMAGE_H
     segmentation: bool = False

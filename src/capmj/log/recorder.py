@@ -33,6 +33,7 @@ from capmj.log.images import SceneCameras, depth_mm, image_entity
 from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
                              SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
 from capmj.log.summary import fmt_vec, jsonable, summary_markdown
+from capmj.sim.cameras import VIEW_CAMERAS
 from capmj.sim.pose import xyzw
 
 if TYPE_CHECKING:
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
     from capmj.sim.world import World
 
 APPLICATION_ID = "capmj"
-CAMERAS: tuple[str, ...] = ("front", "left", "right")
+CAMERAS: tuple[str, ...] = VIEW_CAMERAS
 MARKDOWN_TEXTS = frozenset({"goal", "verdict"})
 PICK_COLOR, PLACE_COLOR, PATH_COLOR, FAILED_PATH_COLOR = [255, 210, 0], [40, 150, 255], [200, 200, 200], [230, 60, 60]
 _FLUSH_FRAMES = 4000         # frames buffered before a flush (200 s of simulated time)
