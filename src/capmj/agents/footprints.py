@@ -21,7 +21,7 @@ import numpy as np
 
 from capmj.sim.bounds import WORKSPACE, Bounds
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
-from capmj.sim.pose import from_frame_2d, mat_yaw
+from capmj.sim.pose import Vector, from_frame_2d, mat_yaw
 from capmj.sim.state import Pose
 
 if TYPE_CHECKING:
@@ -130,7 +130,7 @@ class Footprints:
                 owner.append(k)
         return np.asarray(rows, float).reshape(-1, 7), np.asarray(owner, int)
 
-    def distance(self, xy: Sequence[float], o: ObjectSpec) -> float:
+    def distance(self, xy: Vector, o: ObjectSpec) -> float:
         """Distance (m) from a point to an object's footprint (0 inside)."""
         parts, _ = self.part_arrays([o])
         return float(distances(np.array([float(xy[0])]), np.array([float(xy[1])]), parts).min())
@@ -150,7 +150,7 @@ class Footprints:
         return unary_union(shapes)
 
     # ================================================================== what rests where
-    def surface_z(self, xy: Sequence[float], exclude: set[int]) -> float:
+    def surface_z(self, xy: Vector, exclude: set[int]) -> float:
         """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
         covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
         z = 0.0
@@ -187,7 +187,7 @@ class Footprints:
         mine = self.polygon(t)
         return [o for o in objs if o.obj_id != t.obj_id and mine.intersection(self.polygon(o)).area > 1e-6]
 
-    def within(self, xy: Sequence[float], r: float) -> list[ObjectSpec]:
+    def within(self, xy: Vector, r: float) -> list[ObjectSpec]:
         """Every object whose footprint lies within ``r`` m of the point ``xy``."""
         objs = self._objects()
         parts, owner = self.part_arrays(objs)
@@ -198,7 +198,7 @@ class Footprints:
         return [o for k, o in enumerate(objs) if k in hit]
 
     def free_position(self, area: Sequence[float], r: float, rng: np.random.Generator,
-                      reserved: Iterable[Sequence[float]] = ()) -> list[float]:
+                      reserved: Iterable[Vector] = ()) -> list[float]:
         """A random free position [x, y, 0.0] (m) in ``area`` = (xmin, ymin, xmax, ymax).
 
         Vectorised search over a :data:`FREE_GRID_STEP` grid centred in the area (clipped to the

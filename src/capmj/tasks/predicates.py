@@ -18,7 +18,7 @@ import numpy as np
 
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, ZONE_SIZE, ObjectSpec
-from capmj.sim.pose import from_frame_2d, to_frame_2d
+from capmj.sim.pose import Vector, from_frame_2d, to_frame_2d
 from capmj.sim.state import SceneState
 
 PLANE_TOL = 0.01
@@ -75,7 +75,7 @@ def area_bounds(area: str) -> tuple[float, float, float, float]:
     return (x[0], x[1], y[0], y[1])
 
 
-def in_area(pos: Sequence[float], area: str | tuple[float, float, float, float]) -> bool:
+def in_area(pos: Vector, area: str | tuple[float, float, float, float]) -> bool:
     """Whether the xy of ``pos`` lies in the area (a name or ``(xmin, xmax, ymin, ymax)``).
 
     Tolerance: none.  Bounds are inclusive on the workspace edges; the split lines x = 0.5 and
@@ -94,7 +94,7 @@ def _in_closed_or_split(v: float, lo: float, hi: float, split: float) -> bool:
 
 
 # --------------------------------------------------------------------------------------- zones
-def zone_local_xy(state: SceneState, zone_id: int, xy: Sequence[float]) -> np.ndarray:
+def zone_local_xy(state: SceneState, zone_id: int, xy: Vector) -> np.ndarray:
     """``xy`` expressed in the zone's frame (origin at its centre, axes along its sides)."""
     return to_frame_2d(xy[:2], state.poses[zone_id].yaw, state.pos(zone_id)[:2])
 
@@ -133,9 +133,14 @@ def bowl_rim_z(state: SceneState, bowl_id: int) -> float:
     return float(state.pos(bowl_id)[2]) + BOWL_HEIGHT / 2
 
 
-def bowl_floor_z(state_or_pos: SceneState | Sequence[float], bowl_id: int | None = None) -> float:
+def bowl_floor_z(state_or_pos: SceneState | Vector, bowl_id: int | None = None) -> float:
     """World z (m) of the top of a bowl's floor (bowl centre z − BOWL_HEIGHT/2 + BOWL_FLOOR)."""
-    z = float(state_or_pos.pos(bowl_id)[2]) if isinstance(state_or_pos, SceneState) else float(state_or_pos[2])
+    if isinstance(state_or_pos, SceneState):
+        if bowl_id is None:
+            raise TypeError("bowl_floor_z(state, bowl_id): the bowl's id is needed with a state")
+        z = float(state_or_pos.pos(bowl_id)[2])
+    else:
+        z = float(state_or_pos[2])
     return z - BOWL_HEIGHT / 2 + BOWL_FLOOR
 
 
@@ -247,14 +252,14 @@ def build_tower(
 
 
 # --------------------------------------------------------------------------------------- motion
-def moved_less_than(state: SceneState, obj_id: int, start_pos: Sequence[float], tol: float = MOVE_TOL) -> bool:
+def moved_less_than(state: SceneState, obj_id: int, start_pos: Vector, tol: float = MOVE_TOL) -> bool:
     """Whether the object's centre ends within ``tol`` (default 0.03 m, 3-D distance) of
     ``start_pos``."""
     return float(np.linalg.norm(state.pos(obj_id) - np.asarray(start_pos, dtype=float))) <= tol
 
 
 # --------------------------------------------------------------------------------------- shapes
-def fit_circle(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, float, float]:
+def fit_circle(points: Sequence[Vector]) -> tuple[np.ndarray, float, float]:
     """Least-squares circle through the xy of ``points``: ``(centre_xy, radius, max_residual)``.
 
     ``max_residual`` is the largest |distance to centre − radius| (m).  Fewer than three points or
@@ -284,7 +289,7 @@ def fit_circle(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, float, fl
 
 
 def is_grid(
-    points: Sequence[Sequence[float]],
+    points: Sequence[Vector],
     rows: int,
     cols: int,
     pitch_range: tuple[float, float] = (0.04, 0.06),
@@ -522,9 +527,9 @@ class RowReport:
 
 
 def row_on_line(
-    points: Sequence[Sequence[float]],
-    line_point: Sequence[float],
-    line_dir: Sequence[float],
+    points: Sequence[Vector],
+    line_point: Vector,
+    line_dir: Vector,
     pitch: float,
     *,
     line_tol: float = ROW_LINE_TOL,
@@ -558,7 +563,7 @@ def row_on_line(
                      tuple(float(g) for g in gaps), mid, tuple(reasons))
 
 
-def fixture_slots(origin: Sequence[float], yaw: float, clearance: float = 0.0) -> np.ndarray:
+def fixture_slots(origin: Vector, yaw: float, clearance: float = 0.0) -> np.ndarray:
     """(3, 3) world centres of a small block in each slot of an L-fixture whose origin (slot
     (0, 0), as ``get_obj_pos`` reports it) is ``origin`` and whose yaw is ``yaw``.
 
@@ -683,12 +688,12 @@ def circle_of(state: SceneState, ids: Sequence[int], tol: float = CIRCLE_TOL,
     return True, c, r, f"circle of radius {r:.3f} m at ({c[0]:.3f}, {c[1]:.3f})"
 
 
-def angular_order(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> list[int]:
+def angular_order(state: SceneState, ids: Sequence[int], centre: Vector) -> list[int]:
     """``ids`` sorted by the angle of their xy centre around ``centre``."""
     return sorted(ids, key=lambda i: math.atan2(state.pos(i)[1] - centre[1], state.pos(i)[0] - centre[0]))
 
 
-def alternates(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> tuple[bool, str]:
+def alternates(state: SceneState, ids: Sequence[int], centre: Vector) -> tuple[bool, str]:
     """Whether colours alternate going round ``centre`` (cyclically: two colours, equal counts,
     no two angular neighbours of one colour); the reason names a same-coloured neighbour pair."""
     order = angular_order(state, ids, centre)
