@@ -343,6 +343,7 @@ class VLMReporter:
         base = f"llm/attempt{session.attempt}/vlm_reporter/{call.n}"
         rec.image(f"{base}/final_rgb", rgb)
         rec.depth(f"{base}/final_depth", depth.astype(np.float32))
+        assert self.last_visible_depth is not None  # self.images() has just set it
         rec.image(f"{base}/final_depth_colormap", self.last_visible_depth)
         folder = Path(self.directory) if self.directory is not None else prompts_dir()
         objects = [o.name for o in ctx.world.objects]

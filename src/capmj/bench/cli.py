@@ -18,7 +18,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, NoReturn, Sequence
 
 from capmj.errors import CapmjError, ConfigError
 
@@ -60,7 +60,7 @@ results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, D
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage + error)
+    def error(self, message: str) -> NoReturn:  # one line, exit 2 (argparse prints usage + error)
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
@@ -168,7 +168,7 @@ def parse_seeds(text: str) -> list[int]:
                 raise ConfigError(f"bad seed range {part!r}: it is empty (stop is excluded and must exceed start)")
             if start < 0:
                 raise ConfigError(f"bad seed range {part!r}: seeds must be >= 0")
-            vals = range(start, stop, step)
+            vals: Sequence[int] = range(start, stop, step)
         else:
             try:
                 vals = [int(part)]
@@ -545,7 +545,8 @@ def _stop_resource_tracker() -> None:
     try:
         from multiprocessing import resource_tracker
 
-        resource_tracker._resource_tracker._stop()  # private, but stable since Python 3.8
+        stop = getattr(resource_tracker._resource_tracker, "_stop")  # private (not in typeshed), stable since 3.8
+        stop()
     except Exception:  # noqa: BLE001 - best effort; the tracker ends with us anyway
         pass
 

@@ -215,7 +215,9 @@ def plot(summary: Mapping[str, Any], path: str | Path, title: str = "capmj bench
     fig, ax = plt.subplots(figsize=(9, 1.2 + 0.45 * len(rows) * max(1, k * 0.6)))
     y0 = np.arange(len(rows))[::-1]
     for j, lab in enumerate(labels):
-        ys, vals, err = [], [], [[], []]
+        ys: list[float] = []
+        vals: list[float] = []
+        err: list[list[float]] = [[], []]
         for (name, per), y in zip(rows, y0):
             st = per.get(lab)
             if not st or not st["n"]:

@@ -74,7 +74,7 @@ def quat_yaw(q: Sequence[float]) -> float:
 
 def ravens_action(action: Mapping[str, np.ndarray]) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
     """An env action as Ravens' ``{"pose0": (xyz, xyzw), "pose1": (xyz, xyzw)}``."""
-    out = {}
+    out: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
     for key, name in (("pose0", "pick"), ("pose1", "place")):
         v = np.asarray(action[name], dtype=np.float64)
         out[key] = (tuple(float(c) for c in v[:3]), yaw_quat(float(v[3])))

@@ -157,7 +157,7 @@ def log_robot(rr: Any, rec: Any, model: Any, entities: Mapping[str, str]) -> Non
         return
     bid = model.body(SUCTION_BODY).id
     cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
-    others = [g for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
+    others = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
     parts = body_geoms(rr, model, bid, None, others)
     if parts:
         rec.log(entities[SUCTION_BODY], *parts, static=True)

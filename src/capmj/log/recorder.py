@@ -285,7 +285,8 @@ class RerunRecorder:
                 continue
             holds = view.holds(p.get("obj_id"))
             col = NEUTRAL_COLOR if holds is None else OK_COLOR if holds else FAIL_COLOR
-            o = self._objects.get(p.get("obj_id"))
+            oid = p.get("obj_id")
+            o = self._objects.get(oid) if oid is not None else None
             half = list(o.half_extents) if o is not None else [0.01, 0.01, 0.01]
             self._stamp(p["time"], p["index"])
             self.rec.log(f"{PRIMITIVES}/{p['index']}/final",
@@ -350,7 +351,8 @@ class RerunRecorder:
             self.rec.send_blueprint(episode_blueprint(attempts), make_active=True, make_default=True)
         except Exception:  # noqa: BLE001 - a layout is a convenience; the data is already written
             pass
-        rec, self.rec = self.rec, None
+        rec = self.rec
+        del self.rec  # a closed recorder has no stream (using it raises AttributeError)
         rec.flush()
         rec.disconnect()
         # Drop the stream now: its writer/batcher threads live as long as the Python object, and the

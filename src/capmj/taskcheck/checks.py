@@ -148,8 +148,8 @@ def _scenes(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str
     layouts = {tuple((o.kind, o.color, o.pos) for o in sc.objects) for sc in scenes.values()}
     if len(cfg.seeds) > 1 and len(layouts) == 1:
         problems.append(f"all {len(cfg.seeds)} seeds gave the same scene (generate ignores its rng)")
-    goals = sorted({sc.goal for sc in scenes.values()})
-    return f"{len(cfg.seeds)} seeds, {len(layouts)} distinct layouts", {"goals": goals[:5]}, problems
+    goal_texts = sorted({sc.goal for sc in scenes.values()})
+    return f"{len(cfg.seeds)} seeds, {len(layouts)} distinct layouts", {"goals": goal_texts[:5]}, problems
 
 
 def _goal_text(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str]]:
@@ -219,7 +219,7 @@ def _reward_agrees(task: Task, cfg: CheckConfig, cache: dict[str, Any]) -> tuple
 
 def _protocol(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str]]:
     problems = validate_task(task, cfg.name)
-    tags = getattr(task, "tags", frozenset())
+    tags: Any = getattr(task, "tags", frozenset())  # a plugin's attribute: any type; validate_task reports a bad one
     missing = sorted(cfg.required_tags - set(tags)) if isinstance(tags, (set, frozenset)) else []
     if missing:
         problems.append(f"its tags lack {', '.join(map(repr, missing))}")
