@@ -15,6 +15,7 @@ import numpy as np
 from capmj.agents.base import EpisodeContext
 from capmj.errors import AgentError
 from capmj.sim.bounds import WORKSPACE
+from capmj.tasks.predicates import max_matching
 from capmj.tasks.protocol import OracleGoal, Target
 from capmj.tasks.spawn import free_positions
 
@@ -41,19 +42,9 @@ gap) from the target's xy, so it does not land back in the way of the object abo
 
 
 def _completable(matches: np.ndarray, rows: list[int], cols: list[int]) -> bool:
-    """Whether every row can get its own column (augmenting-path bipartite matching)."""
-    owner: dict[int, int] = {}
-
-    def augment(r: int, seen: set[int]) -> bool:
-        for c in cols:
-            if matches[r, c] and c not in seen:
-                seen.add(c)
-                if c not in owner or augment(owner[c], seen):
-                    owner[c] = r
-                    return True
-        return False
-
-    return all(augment(r, set()) for r in rows)
+    """Whether every row (object) can get its own column (target) among ``cols``."""
+    adj = [[c for c in cols if matches[r, c]] for r in rows]
+    return max_matching(adj, matches.shape[1]) == len(rows)
 
 
 class OracleAgent:

@@ -366,8 +366,9 @@ def _pose_match(state: SceneState, obj_id: int, goal, target) -> bool:
     return True
 
 
-def _max_matching(adj: list[list[int]], n_targets: int) -> int:
-    """Size of a maximum bipartite matching (Kuhn's augmenting paths; goals are small)."""
+def max_matching(adj: Sequence[Sequence[int]], n_targets: int) -> int:
+    """Size of a maximum bipartite matching of objects to targets, ``adj[i]`` listing the targets
+    (``0 <= j < n_targets``) object ``i`` may take (Kuhn's augmenting paths; goals are small)."""
     owner = [-1] * n_targets
 
     def augment(i: int, seen: list[bool]) -> bool:
@@ -402,7 +403,7 @@ def ravens_reward(goals: Sequence, state: SceneState) -> float:
         total += len(g.objects)
         adj = [[j for j, t in enumerate(g.targets) if g.matches[i][j] and _pose_match(state, oid, g, t)]
                for i, oid in enumerate(g.objects)]
-        matched += sum(1 for a in adj if a) if g.replace else _max_matching(adj, len(g.targets))
+        matched += sum(1 for a in adj if a) if g.replace else max_matching(adj, len(g.targets))
     return matched / total if total else 0.0
 
 
@@ -422,7 +423,7 @@ __all__ = [
     "AREA_NAMES", "BOWL_TOL", "MOVE_TOL", "PLANE_TOL", "QUADRANTS", "STACK_AXIS_TOL", "TILT_TOL", "YAW_TOL",
     "Z_TOL", "WORKSPACE_X", "WORKSPACE_Y", "WORKSPACE_Z",
     "area_bounds", "bowl_floor_z", "bowl_rim_z", "build_tower", "find_stack_order", "fit_circle", "in_area",
-    "in_bowl", "in_zone", "is_grid", "is_stack", "moved_less_than", "objects_in_zone", "positions",
+    "in_bowl", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
     "ravens_reward", "resting_on", "resting_on_table", "short_label", "toppled", "zone_half_size",
     "zone_local_xy", "zone_outside_distance",
 ]
