@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from capmj.atomic import atomic_write, write_json_atomic
 from capmj.bench.cli import main, parse_seeds
 from capmj.bench.results import REQUIRED_KEYS, ResultsWriter, read_results, wilson
 from capmj.errors import ConfigError
@@ -234,6 +235,17 @@ def test_results_writer_cuts_truncated_line(tmp_path):
         w.write({"task": "a", "seed": 2, "agent": "o", "model": None})
     recs, bad = read_results(p)
     assert [r["seed"] for r in recs] == [1, 2] and bad == 0
+
+
+def test_atomic_write_replaces_whole_or_not_at_all(tmp_path):
+    p = tmp_path / "summary.json"
+    write_json_atomic(p, {"b": 1, "a": [1.5]}, sort_keys=True)
+    assert p.read_text() == '{"a": [1.5], "b": 1}\n'
+    with pytest.raises(RuntimeError):
+        with atomic_write(p) as f:
+            f.write("half")
+            raise RuntimeError("killed while writing")
+    assert json.loads(p.read_text()) == {"a": [1.5], "b": 1} and [q.name for q in tmp_path.iterdir()] == [p.name]
 
 
 def test_wilson_interval():

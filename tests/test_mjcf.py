@@ -12,7 +12,8 @@ from capmj.resources import mjcf_path, packaged
 from capmj.sim import objects as O
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.cameras import VIEW_CAMERAS
-from capmj.sim.pose import lookat_quat, mat_yaw, quat_to_mat, rotate_2d, yaw_quat
+from capmj.sim.pose import (from_frame_2d, lookat_quat, mat_yaw, quat_euler_xyz, quat_to_mat, quat_yaw, rotate_2d,
+                            to_frame_2d, wxyz, xyzw, yaw_quat)
 from capmj.sim.robot import CUP_LENGTH, CUP_RADIUS
 from capmj.sim.scene import compile_scene
 
@@ -86,3 +87,24 @@ def test_pose_helpers_agree(yaw):
     assert mat_yaw(mat) == pytest.approx(yaw)
     np.testing.assert_allclose(rotate_2d([[1.0, 0.0], [0.3, -0.2]], yaw), [mat[:2, 0], mat[:2, :2] @ [0.3, -0.2]],
                                atol=1e-15)
+
+
+@pytest.mark.parametrize("yaw", [-3.0, -0.4, 0.0, 1.2, 2.9])
+def test_planar_frames_and_quaternion_orders(yaw):
+    q = yaw_quat(yaw)
+    assert quat_yaw(q) == pytest.approx(yaw) and quat_euler_xyz(q) == pytest.approx([0.0, 0.0, yaw])
+    assert wxyz(xyzw(q)) == tuple(q) and xyzw(q) == (q[1], q[2], q[3], q[0])
+    origin, uv = (0.4, -0.1), np.array([[0.03, 0.0], [-0.01, 0.02]])
+    world = from_frame_2d(uv, yaw, origin)
+    np.testing.assert_allclose(world, origin + rotate_2d(uv, yaw), atol=1e-15)
+    np.testing.assert_allclose(to_frame_2d(world, yaw, origin), uv, atol=1e-15)
+
+
+def test_euler_of_a_tilted_quaternion():
+    # 90° about x then 30° about z (extrinsic XYZ): PyBullet's getEulerFromQuaternion gives (π/2, 0, π/6)
+    rx, rz = np.empty(4), np.empty(4)
+    mujoco.mju_axisAngle2Quat(rx, [1.0, 0.0, 0.0], np.pi / 2)
+    mujoco.mju_axisAngle2Quat(rz, [0.0, 0.0, 1.0], np.pi / 6)
+    q = np.empty(4)
+    mujoco.mju_mulQuat(q, rz, rx)
+    assert quat_euler_xyz(q) == pytest.approx([np.pi / 2, 0.0, np.pi / 6], abs=1e-12)

@@ -9,6 +9,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from capmj.sim.objects import ObjectSpec
+from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
@@ -137,7 +138,7 @@ def solved_state(scene: Scene, goals: Sequence[OracleGoal]) -> SceneState:
                 if g.matches[i][j] and (g.replace or j not in taken):
                     taken.add(j)
                     yaw = t.yaw if t.yaw is not None else scene.by_id(oid).yaw
-                    poses[oid] = Pose(tuple(float(v) for v in t.pos), (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
+                    poses[oid] = Pose.of(t.pos, yaw_quat(yaw))
                     break
     return SceneState(tuple(scene.objects), poses)
 

@@ -1,8 +1,9 @@
 """The planner API: the only thing LLM-written plan code can touch.
 
 :class:`PlannerAPI` wraps one :class:`~capmj.agents.base.EpisodeContext` and hands out plain
-functions (closures) through :meth:`PlannerAPI.functions`.  Sandboxed code cannot reach a
-closure's cells (dunder and ``_private`` attribute access is rejected by the sandbox), and every
+functions through :meth:`PlannerAPI.functions`: the methods of :class:`PlanFunctions` (one per API
+function, named in :data:`API_FUNCTIONS`), each wrapped in a closure that logs the call.
+Sandboxed code cannot reach a closure's cells (dunder and ``_private`` attribute access is rejected by the sandbox), and every
 value the functions return is plain data (str, float, list, tuple, dict, numpy array), so there is
 no public attribute path from plan code to the ``World``, ``MjModel`` or ``MjData``.
 
@@ -30,15 +31,16 @@ error, simulated time) for the episode log.
 from __future__ import annotations
 
 import difflib
-import math
 import re
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, WORKSPACE, Footprints
+from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, Footprints
+from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
+from capmj.sim.pose import quat_euler_xyz, quat_yaw, wxyz
 from capmj.tasks.protocol import episode_rng
 
 CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
@@ -48,22 +50,10 @@ _SIDES_UV = ((0.5, 1.0), (1.0, 0.5), (0.5, 0.0), (0.0, 0.5))
 
 
 def denormalize_uv(u: float, v: float) -> tuple[float, float]:
-    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image."""
-    return 0.75 - 0.5 * float(v), -0.5 + float(u)
-
-
-def _xyzw_yaw(q: Sequence[float]) -> float:
-    x, y, z, w = (float(v) for v in q)
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
-def _euler_xyz(q_xyzw: Sequence[float]) -> list[float]:
-    """Roll, pitch, yaw (rad) of an (x, y, z, w) quaternion, as PyBullet's getEulerFromQuaternion."""
-    x, y, z, w = (float(v) for v in q_xyzw)
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return [roll, pitch, yaw]
+    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image
+    (x = 0.75 − 0.5 v, y = −0.5 + u on :data:`capmj.sim.bounds.WORKSPACE`)."""
+    w = WORKSPACE
+    return w.xmax - (w.xmax - w.xmin) * float(v), w.ymin + (w.ymax - w.ymin) * float(u)
 
 
 def _is_number(v: Any) -> bool:
@@ -225,137 +215,11 @@ class PlannerAPI:
 
     # ================================================================== the API
     def functions(self) -> dict[str, Callable[..., Any]]:
-        """Plain functions for plan code, by name (each call logged in :attr:`call_log`)."""
-        api = self
-
-        def get_obj_names() -> list[str]:
-            """Names of every object in the scene (read from the live world)."""
-            return api._names()
-
-        def get_obj_pos(obj):
-            """[x, y, z] (m) of an object's geometric centre; a list of names gives a list."""
-            if isinstance(obj, (list, tuple, np.ndarray)):
-                return [get_obj_pos(o) for o in obj]
-            return [float(v) for v in api._pos(api._resolve(obj).obj_id)]
-
-        def get_obj_rot(obj):
-            """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list."""
-            if isinstance(obj, (list, tuple, np.ndarray)):
-                return [get_obj_rot(o) for o in obj]
-            return api._xquat(api._resolve(obj).obj_id)
-
-        def get_bbox(obj):
-            """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out."""
-            if isinstance(obj, (list, tuple, np.ndarray)):
-                return [get_bbox(o) for o in obj]
-            lo, hi = api._world.aabb(api._resolve(obj).obj_id)
-            return tuple(float(v) for v in (*lo, *hi))
-
-        def get_obj_pos_dict() -> dict[str, tuple[list[float], list[float]]]:
-            """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
-            return {o.name: ([float(v) for v in api._pos(o.obj_id)], _euler_xyz(api._xquat(o.obj_id)))
-                    for o in api._objects()}
-
-        def get_obj_positions_np(names) -> np.ndarray:
-            """(n, 3) array of object centres (m)."""
-            names = [names] if isinstance(names, (str, int)) else list(names)
-            return np.array([get_obj_pos(n) for n in names], float).reshape(-1, 3)
-
-        def get_obj_rotations_np(names) -> np.ndarray:
-            """(n, 4) array of object quaternions (x, y, z, w)."""
-            names = [names] if isinstance(names, (str, int)) else list(names)
-            return np.array([get_obj_rot(n) for n in names], float).reshape(-1, 4)
-
-        def get_color(obj) -> str:
-            """The colour name of an object ("red", "blue", ...)."""
-            return api._resolve(obj).color
-
-        def denormalize(pos):
-            """Normalised [u, v] (u left→right, v bottom→top, both in [0, 1]) → world [x, y]:
-            x = 0.75 − 0.5 v, y = −0.5 + u.  A third value (z) is passed through; a list of
-            points gives a list."""
-            arr = np.asarray(pos, float)
-            if arr.ndim == 2:
-                return [denormalize(p) for p in arr]
-            if arr.ndim != 1 or len(arr) not in (2, 3):
-                raise ValueError(f"denormalize expects [u, v] or [u, v, z], got {_summary(pos, 80)}")
-            x, y = denormalize_uv(arr[0], arr[1])
-            return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
-
-        def get_corner_name(pos) -> str:
-            """Name of the workspace corner nearest to a position ("top left corner", ...)."""
-            p = api._xy(pos)
-            corners = np.array([denormalize_uv(u, v) for u, v in _CORNERS_UV])
-            return CORNER_NAMES[int(np.argmin(np.hypot(*(corners - p).T)))]
-
-        def get_side_name(pos) -> str:
-            """Name of the workspace side nearest to a position ("top side", "right side", ...)."""
-            p = api._xy(pos)
-            sides = np.array([denormalize_uv(u, v) for u, v in _SIDES_UV])
-            return SIDE_NAMES[int(np.argmin(np.hypot(*(sides - p).T)))]
-
-        def is_target_occupied(targ, r: float = 0.02) -> list[str]:
-            """Names of the objects occupying a target.
-
-            ``targ`` a position ([x, y], [x, y, z] or (position, quaternion)): every object whose
-            footprint lies within ``r`` m of its xy.  ``targ`` a name: every other object whose
-            footprint overlaps that object's footprint (e.g. blocks in a zone, or the zone under a
-            block and whatever is stacked on it).  Zones, bowls and the like count as objects.
-            """
-            return api._occupied(targ, float(r))
-
-        def get_random_free_pos(targ=None, area=None, r: float = FREE_CLEARANCE, search_area=None) -> list[float]:
-            """A random free position [x, y, 0.0] (m) on the table.
-
-            ``area`` = (xmin, ymin, xmax, ymax), default the reachable workspace; the returned
-            centre keeps ``r`` from the area border when the area allows.  Free = at least ``r``
-            m from every object's footprint (the default 0.045 fits a big block at any yaw) and
-            not occupying ``targ`` (names, positions or poses to keep ``2 r`` from — objects are
-            avoided anyway).  Raises ValueError when nothing is free.
-            """
-            return api._free_pos(targ, search_area if area is None else area, float(r))
-
-        def put_first_on_second(obj, target) -> None:
-            """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
-
-            ``target``: a name → on that object's real top (a zone: at its centre on the table or
-            on what is stacked there; a bowl: inside, on its floor); [x, y] → at that point, resting
-            on whatever is there; [x, y, z] → centre at z, or resting on what is there when that
-            is higher; (position, quaternion xyzw) → also turned to the quaternion's yaw.
-            Raises ValueError for bad arguments and RuntimeError when the robot fails.
-            """
-            api._put(obj, target)
-
-        def stack_objects_in_order(names, targ=None) -> None:
-            """Stack ``names`` bottom (names[0]) to top; names[0] goes on ``targ`` when given,
-            otherwise it stays where it is.  Each next object goes on the previous one's top."""
-            if isinstance(names, (str, int)):
-                names = [names]
-            names = list(names)
-            if not names:
-                return
-            put = logged["put_first_on_second"]  # each step appears in the call log
-            if targ is not None:
-                put(names[0], targ)
-            for lower, upper in zip(names, names[1:]):
-                put(upper, lower)
-
-        def say(msg) -> None:
-            """Record a message in the episode log."""
-            text = str(msg)
-            api.messages.append(text)
-            api._ctx.recorder.text("planner/say", text, api._world.time)
-
-        fns = {
-            "get_obj_names": get_obj_names, "get_obj_pos": get_obj_pos, "get_obj_rot": get_obj_rot,
-            "get_bbox": get_bbox, "get_obj_pos_dict": get_obj_pos_dict, "denormalize": denormalize,
-            "is_target_occupied": is_target_occupied, "get_random_free_pos": get_random_free_pos,
-            "put_first_on_second": put_first_on_second, "stack_objects_in_order": stack_objects_in_order,
-            "say": say, "get_obj_positions_np": get_obj_positions_np,
-            "get_obj_rotations_np": get_obj_rotations_np, "get_corner_name": get_corner_name,
-            "get_side_name": get_side_name, "get_color": get_color,
-        }
-        logged = {name: self._logged(name, fn) for name, fn in fns.items()}
+        """Plain functions for plan code, by name (each call logged in :attr:`call_log`): the
+        methods of a :class:`PlanFunctions` over this API named in :data:`API_FUNCTIONS`."""
+        fns = PlanFunctions(self)
+        logged = {name: self._logged(name, getattr(fns, name)) for name in API_FUNCTIONS}
+        fns.use_logged(logged)
         return dict(logged)
 
     # ================================================================== implementations
@@ -380,7 +244,7 @@ class PlannerAPI:
         if area is None and targ is not None and _is_vector(targ, (4,)):
             area, targ = targ, None  # the original accepted the search area as the first argument
         if area is None:
-            area = WORKSPACE
+            area = WORKSPACE.xyxy
         if not _is_vector(area, (4,)):
             raise ValueError(f"area must be (xmin, ymin, xmax, ymax) in metres, got {_summary(area, 80)}")
         if not r >= 0:
@@ -440,7 +304,7 @@ class PlannerAPI:
             if isinstance(target, (list, tuple)) and len(target) == 1:
                 target = target[0]  # the original API's one-element position lists
             if _is_pose(target):
-                yaw = _xyzw_yaw(target[1])
+                yaw = quat_yaw(wxyz(target[1]))
                 target = target[0]
             if not _is_vector(target):
                 raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
@@ -459,5 +323,167 @@ class PlannerAPI:
             raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
 
 
+class PlanFunctions:
+    """The planner API functions of one episode, one method each, over a :class:`PlannerAPI`.
+
+    The methods named in :data:`API_FUNCTIONS` are what plan code calls: their names, signatures
+    and docstrings are the API the prompts document.  :meth:`PlannerAPI.functions` hands them out
+    wrapped for the call log; a method calling another calls it unlogged (``get_obj_pos`` of a list
+    is one logged call), except that :meth:`stack_objects_in_order` logs each step it takes
+    (through the logged functions given to :meth:`use_logged`).  Names are resolved, arguments
+    checked and logged by the :class:`PlannerAPI`, and the geometry is :mod:`capmj.agents.footprints`.
+    """
+
+    def __init__(self, api: PlannerAPI) -> None:
+        self._api = api
+        self._logged: Mapping[str, Callable[..., Any]] = {}
+
+    def use_logged(self, logged: Mapping[str, Callable[..., Any]]) -> None:
+        """The logged versions of these functions, for the ones that call others as steps."""
+        self._logged = logged
+
+    def get_obj_names(self) -> list[str]:
+        """Names of every object in the scene (read from the live world)."""
+        return self._api._names()
+
+    def get_obj_pos(self, obj):
+        """[x, y, z] (m) of an object's geometric centre; a list of names gives a list."""
+        if isinstance(obj, (list, tuple, np.ndarray)):
+            return [self.get_obj_pos(o) for o in obj]
+        return [float(v) for v in self._api._pos(self._api._resolve(obj).obj_id)]
+
+    def get_obj_rot(self, obj):
+        """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list."""
+        if isinstance(obj, (list, tuple, np.ndarray)):
+            return [self.get_obj_rot(o) for o in obj]
+        return self._api._xquat(self._api._resolve(obj).obj_id)
+
+    def get_bbox(self, obj):
+        """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out."""
+        if isinstance(obj, (list, tuple, np.ndarray)):
+            return [self.get_bbox(o) for o in obj]
+        lo, hi = self._api._world.aabb(self._api._resolve(obj).obj_id)
+        return tuple(float(v) for v in (*lo, *hi))
+
+    def get_obj_pos_dict(self) -> dict[str, tuple[list[float], list[float]]]:
+        """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
+        api = self._api
+        return {o.name: ([float(v) for v in api._pos(o.obj_id)], quat_euler_xyz(wxyz(api._xquat(o.obj_id))))
+                for o in api._objects()}
+
+    def get_obj_positions_np(self, names) -> np.ndarray:
+        """(n, 3) array of object centres (m)."""
+        names = [names] if isinstance(names, (str, int)) else list(names)
+        return np.array([self.get_obj_pos(n) for n in names], float).reshape(-1, 3)
+
+    def get_obj_rotations_np(self, names) -> np.ndarray:
+        """(n, 4) array of object quaternions (x, y, z, w)."""
+        names = [names] if isinstance(names, (str, int)) else list(names)
+        return np.array([self.get_obj_rot(n) for n in names], float).reshape(-1, 4)
+
+    def get_color(self, obj) -> str:
+        """The colour name of an object ("red", "blue", ...)."""
+        return self._api._resolve(obj).color
+
+    def denormalize(self, pos):
+        """Normalised [u, v] (u left→right, v bottom→top, both in [0, 1]) → world [x, y]:
+        x = 0.75 − 0.5 v, y = −0.5 + u.  A third value (z) is passed through; a list of
+        points gives a list."""
+        arr = np.asarray(pos, float)
+        if arr.ndim == 2:
+            return [self.denormalize(p) for p in arr]
+        if arr.ndim != 1 or len(arr) not in (2, 3):
+            raise ValueError(f"denormalize expects [u, v] or [u, v, z], got {_summary(pos, 80)}")
+        x, y = denormalize_uv(arr[0], arr[1])
+        return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
+
+    def get_corner_name(self, pos) -> str:
+        """Name of the workspace corner nearest to a position ("top left corner", ...)."""
+        p = self._api._xy(pos)
+        corners = np.array([denormalize_uv(u, v) for u, v in _CORNERS_UV])
+        return CORNER_NAMES[int(np.argmin(np.hypot(*(corners - p).T)))]
+
+    def get_side_name(self, pos) -> str:
+        """Name of the workspace side nearest to a position ("top side", "right side", ...)."""
+        p = self._api._xy(pos)
+        sides = np.array([denormalize_uv(u, v) for u, v in _SIDES_UV])
+        return SIDE_NAMES[int(np.argmin(np.hypot(*(sides - p).T)))]
+
+    def is_target_occupied(self, targ, r: float = 0.02) -> list[str]:
+        """Names of the objects occupying a target.
+
+        ``targ`` a position ([x, y], [x, y, z] or (position, quaternion)): every object whose
+        footprint lies within ``r`` m of its xy.  ``targ`` a name: every other object whose
+        footprint overlaps that object's footprint (e.g. blocks in a zone, or the zone under a
+        block and whatever is stacked on it).  Zones, bowls and the like count as objects.
+        """
+        return self._api._occupied(targ, float(r))
+
+    def get_random_free_pos(self, targ=None, area=None, r: float = FREE_CLEARANCE, search_area=None) -> list[float]:
+        """A random free position [x, y, 0.0] (m) on the table.
+
+        ``area`` = (xmin, ymin, xmax, ymax), default the reachable workspace; the returned
+        centre keeps ``r`` from the area border when the area allows.  Free = at least ``r``
+        m from every object's footprint (the default 0.045 fits a big block at any yaw) and
+        not occupying ``targ`` (names, positions or poses to keep ``2 r`` from — objects are
+        avoided anyway).  Raises ValueError when nothing is free.
+        """
+        return self._api._free_pos(targ, search_area if area is None else area, float(r))
+
+    def put_first_on_second(self, obj, target) -> None:
+        """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
+
+        ``target``: a name → on that object's real top (a zone: at its centre on the table or
+        on what is stacked there; a bowl: inside, on its floor); [x, y] → at that point, resting
+        on whatever is there; [x, y, z] → centre at z, or resting on what is there when that
+        is higher; (position, quaternion xyzw) → also turned to the quaternion's yaw.
+        Raises ValueError for bad arguments and RuntimeError when the robot fails.
+        """
+        self._api._put(obj, target)
+
+    def stack_objects_in_order(self, names, targ=None) -> None:
+        """Stack ``names`` bottom (names[0]) to top; names[0] goes on ``targ`` when given,
+        otherwise it stays where it is.  Each next object goes on the previous one's top."""
+        if isinstance(names, (str, int)):
+            names = [names]
+        names = list(names)
+        if not names:
+            return
+        put = self._logged["put_first_on_second"]  # each step appears in the call log
+        if targ is not None:
+            put(names[0], targ)
+        for lower, upper in zip(names, names[1:]):
+            put(upper, lower)
+
+    def say(self, msg) -> None:
+        """Record a message in the episode log."""
+        text = str(msg)
+        self._api.messages.append(text)
+        self._api._ctx.recorder.text("planner/say", text, self._api._world.time)
+
+
+API_FUNCTIONS: tuple[str, ...] = (
+    "get_obj_names",
+    "get_obj_pos",
+    "get_obj_rot",
+    "get_bbox",
+    "get_obj_pos_dict",
+    "denormalize",
+    "is_target_occupied",
+    "get_random_free_pos",
+    "put_first_on_second",
+    "stack_objects_in_order",
+    "say",
+    "get_obj_positions_np",
+    "get_obj_rotations_np",
+    "get_corner_name",
+    "get_side_name",
+    "get_color",
+)
+"""The names of the planner API functions (methods of :class:`PlanFunctions`), in the order
+:meth:`PlannerAPI.functions` returns them."""
+
+
 # the geometry constants are re-exported: callers and benchmarks import them from here
-__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "PlannerAPI", "REACH_RADIUS", "TILTED", "WORKSPACE", "denormalize_uv"]
+__all__ = ["API_FUNCTIONS", "FREE_CLEARANCE", "FREE_GRID_STEP", "PlanFunctions", "PlannerAPI", "REACH_RADIUS", "TILTED",
+           "denormalize_uv"]

@@ -20,6 +20,14 @@ from capmj.sim.world import World, WorldSnapshot
 from capmj.tasks.protocol import Scene, Task, Verdict
 
 
+JUDGE_SETTLE_STEPS = 1000
+"""Most physics steps (2 s simulated at the 2 ms step) to let objects come to rest before a final
+state is judged or shown to a reporter.  A pick-and-place already ends with a looser settle (at most
+750 steps, to 0.01 m/s), so this, at ``World.settle``'s 0.005 m/s, only catches what is still
+rocking or rolling (a ball, a block knocked off a stack); it is shorter than the 1500-step settle
+of a freshly spawned scene, and ``World.settle`` stops as soon as everything is that slow."""
+
+
 @dataclass(frozen=True)
 class Budget:
     """Per-attempt limits: pick-and-place calls and simulation steps."""
@@ -97,7 +105,7 @@ class EpisodeContext:
     # ------------------------------------------------------------------ judging
     def verdict(self) -> Verdict:
         """Let objects settle, then judge the final state with the task's predicate."""
-        self.world.settle(max_steps=1000)
+        self.world.settle(max_steps=JUDGE_SETTLE_STEPS)
         return self.task.evaluate(self.scene, self.world.state())
 
 

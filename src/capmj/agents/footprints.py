@@ -19,14 +19,14 @@ from typing import TYPE_CHECKING, Callable, Iterable, Sequence
 import mujoco
 import numpy as np
 
+from capmj.sim.bounds import WORKSPACE, Bounds
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
+from capmj.sim.pose import Vector, from_frame_2d, mat_yaw
 from capmj.sim.state import Pose
 
 if TYPE_CHECKING:
     from capmj.sim.world import World
 
-WORKSPACE = (0.25, -0.5, 0.75, 0.5)
-"""(xmin, ymin, xmax, ymax) of the workspace, the default search area (m)."""
 REACH_RADIUS = 0.84
 """Object centres farther than this (m, in xy) from the robot base are not offered as free
 positions: the far workspace corners (e.g. (0.73, 0.48)) are out of the UR5e's reach."""
@@ -97,8 +97,7 @@ class Footprints:
                 if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE):
                     out.append(("disc", centre[0], centre[1], float(half[0])))
                     continue
-                yaw = math.atan2(mat[1, 0], mat[0, 0])
-                out.append(("rect", centre[0], centre[1], yaw, float(half[0]), float(half[1])))
+                out.append(("rect", centre[0], centre[1], mat_yaw(mat), float(half[0]), float(half[1])))
             return out
 
         return cls(lambda: tuple(world.objects), world.pose, world.aabb, world.top_z, geom_parts)
@@ -131,7 +130,7 @@ class Footprints:
                 owner.append(k)
         return np.asarray(rows, float).reshape(-1, 7), np.asarray(owner, int)
 
-    def distance(self, xy: Sequence[float], o: ObjectSpec) -> float:
+    def distance(self, xy: Vector, o: ObjectSpec) -> float:
         """Distance (m) from a point to an object's footprint (0 inside)."""
         parts, _ = self.part_arrays([o])
         return float(distances(np.array([float(xy[0])]), np.array([float(xy[1])]), parts).min())
@@ -147,13 +146,11 @@ class Footprints:
                 shapes.append(Point(p[1], p[2]).buffer(p[3], 32))
                 continue
             _, cx, cy, yaw, hx, hy = p
-            c, s = math.cos(yaw), math.sin(yaw)
-            shapes.append(Polygon([(cx + c * a - s * b, cy + s * a + c * b)
-                                   for a, b in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]))
+            shapes.append(Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], yaw, (cx, cy))))
         return unary_union(shapes)
 
     # ================================================================== what rests where
-    def surface_z(self, xy: Sequence[float], exclude: set[int]) -> float:
+    def surface_z(self, xy: Vector, exclude: set[int]) -> float:
         """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
         covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
         z = 0.0
@@ -190,7 +187,7 @@ class Footprints:
         mine = self.polygon(t)
         return [o for o in objs if o.obj_id != t.obj_id and mine.intersection(self.polygon(o)).area > 1e-6]
 
-    def within(self, xy: Sequence[float], r: float) -> list[ObjectSpec]:
+    def within(self, xy: Vector, r: float) -> list[ObjectSpec]:
         """Every object whose footprint lies within ``r`` m of the point ``xy``."""
         objs = self._objects()
         parts, owner = self.part_arrays(objs)
@@ -201,11 +198,11 @@ class Footprints:
         return [o for k, o in enumerate(objs) if k in hit]
 
     def free_position(self, area: Sequence[float], r: float, rng: np.random.Generator,
-                      reserved: Iterable[Sequence[float]] = ()) -> list[float]:
+                      reserved: Iterable[Vector] = ()) -> list[float]:
         """A random free position [x, y, 0.0] (m) in ``area`` = (xmin, ymin, xmax, ymax).
 
         Vectorised search over a :data:`FREE_GRID_STEP` grid centred in the area (clipped to the
-        workspace and, when large enough, shrunk by ``r``) and within :data:`REACH_RADIUS`: every
+        workspace, :data:`capmj.sim.bounds.WORKSPACE`, and, when large enough, shrunk by ``r``) and within :data:`REACH_RADIUS`: every
         footprint part, and a disc of radius ``r`` around every ``reserved`` xy, clears the cells
         closer than ``r`` in its own grid window; one free cell is drawn with ``rng`` (the same
         scene and draws give the same positions).  ``reserved`` is consumed only after the area
@@ -216,12 +213,12 @@ class Footprints:
         if xmin > xmax or ymin > ymax:
             raise ValueError(f"area {area} is empty: the order is (xmin, ymin, xmax, ymax)")
         # centres stay inside the workspace and, when the area is large enough, r from its border
-        wx0, wy0, wx1, wy1 = WORKSPACE
-        bx0, by0, bx1, by1 = max(xmin, wx0), max(ymin, wy0), min(xmax, wx1), min(ymax, wy1)
-        if bx0 > bx1 or by0 > by1:
-            raise ValueError(f"area {tuple(area)} lies outside the workspace {WORKSPACE}")
-        if bx1 - bx0 >= 2 * r + FREE_GRID_STEP and by1 - by0 >= 2 * r + FREE_GRID_STEP:
-            bx0, by0, bx1, by1 = bx0 + r, by0 + r, bx1 - r, by1 - r
+        b = Bounds(xmin, xmax, ymin, ymax).intersect(WORKSPACE)
+        if b.empty:
+            raise ValueError(f"area {tuple(area)} lies outside the workspace {WORKSPACE.xyxy}")
+        if b.xmax - b.xmin >= 2 * r + FREE_GRID_STEP and b.ymax - b.ymin >= 2 * r + FREE_GRID_STEP:
+            b = b.shrink(r)
+        bx0, by0, bx1, by1 = b.xyxy
         nx = int(math.floor((bx1 - bx0) / FREE_GRID_STEP)) + 1
         ny = int(math.floor((by1 - by0) / FREE_GRID_STEP)) + 1
         xs = bx0 + FREE_GRID_STEP * np.arange(nx) + ((bx1 - bx0) - FREE_GRID_STEP * (nx - 1)) / 2
@@ -249,5 +246,4 @@ class Footprints:
         return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
 
 
-__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "REACH_RADIUS", "TILTED", "WORKSPACE",
-           "distances"]
+__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "REACH_RADIUS", "TILTED", "distances"]

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp import LMPCall, LMPSession, load_system_prompt, prompts_dir
 from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.sandbox import extract_code, run_code
@@ -332,7 +333,7 @@ class VLMReporter:
 
         call = session.next_call("vlm_reporter", goal)
         try:
-            ctx.world.settle(max_steps=1000)
+            ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
             png_initial, png_final, png_depth, rgb, depth = self.images(ctx)
         except (CapmjError, RuntimeError, OSError) as exc:
             error = f"no images: {type(exc).__name__}: {exc}"
@@ -342,6 +343,7 @@ class VLMReporter:
         base = f"llm/attempt{session.attempt}/vlm_reporter/{call.n}"
         rec.image(f"{base}/final_rgb", rgb)
         rec.depth(f"{base}/final_depth", depth.astype(np.float32))
+        assert self.last_visible_depth is not None  # self.images() has just set it
         rec.image(f"{base}/final_depth_colormap", self.last_visible_depth)
         folder = Path(self.directory) if self.directory is not None else prompts_dir()
         objects = [o.name for o in ctx.world.objects]

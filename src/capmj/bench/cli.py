@@ -16,10 +16,15 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, NoReturn, Sequence
 
 from capmj.errors import CapmjError, ConfigError
+
+if TYPE_CHECKING:  # the bench modules load lazily: importing the CLI stays light
+    from capmj.bench.grid import GridStats, Job
+    from capmj.bench.spend import BudgetTracker, RunBudget
 
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
@@ -55,7 +60,7 @@ results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, D
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2 (argparse prints usage + error)
+    def error(self, message: str) -> NoReturn:  # one line, exit 2 (argparse prints usage + error)
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
@@ -166,7 +171,7 @@ def parse_seeds(text: str) -> list[int]:
                 raise ConfigError(f"bad seed range {part!r}: it is empty (stop is excluded and must exceed start)")
             if start < 0:
                 raise ConfigError(f"bad seed range {part!r}: seeds must be >= 0")
-            vals = range(start, stop, step)
+            vals: Sequence[int] = range(start, stop, step)
         else:
             try:
                 vals = [int(part)]
@@ -259,24 +264,54 @@ def _confirm_llm_grid(args: argparse.Namespace, agent: str, n: int) -> None:
     raise ConfigError(f"{what}; give --seeds explicitly (e.g. --seeds 10001:10011:2) or add --yes")
 
 
-def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
-    from capmj.agents.factory import make_agent
-    from capmj.bench.grid import AgentSpec, Job, rrd_relpath, run_jobs_to_file
-    from capmj.bench.manifest import run_manifest
-    from capmj.bench.report import pct_cell, write_summary
-    from capmj.bench.spend import BudgetTracker, RunBudget
-    from capmj.bench.results import (
-        CONFIG,
-        EPISODES,
-        ResultsWriter,
-        episode_key,
-        load_json,
-        read_results,
-        summarize,
-        write_json_atomic,
-    )
+@dataclass
+class _Settings:
+    """What to run, after ``--resume`` merged the stored config.json under the command line."""
 
-    # ---- the result folder and what an earlier run left there
+    out: Path
+    stored: dict[str, Any] | None
+    tasks_sel: str
+    seeds_sel: str
+    agent_name: str
+    options: dict[str, Any]
+    workers: int
+    concurrency: int
+    log: bool
+    images: bool
+    run_budget: RunBudget
+
+
+@dataclass
+class _Grid:
+    """The checked grid: seeds, task names (and hand-registered task objects) and the agent's identity."""
+
+    seeds: list[int]
+    tasks: list[str]
+    registered: list[Any]
+    agent_label: str
+    model: str | None
+    manifest: dict[str, Any]
+
+
+def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
+    """The grid command: settings (resume merging) → validation → config.json → the episodes still
+    to run → running them with progress → summary files → printed results and exit code."""
+    settings = _settings(args)
+    grid = _validate(args, settings)
+    _write_config(args, argv, settings, grid)
+    jobs, budget, total = _plan(settings, grid)
+    progress = _Progress(budget, len(jobs), show=not args.no_progress)
+    stats, interrupted, elapsed = _execute(args, settings, grid, jobs, budget, progress)
+    records, summary = _write_summary(settings, stats, elapsed, progress, budget)
+    return _print_outcome(settings.out, summary, records, total, elapsed, progress, budget, interrupted)
+
+
+def _settings(args: argparse.Namespace) -> _Settings:
+    """The result folder, what an earlier run left there (``--resume``), and the run's options: the
+    command line wins, the stored config.json fills in what it leaves out; numbers are checked."""
+    from capmj.bench.results import CONFIG, EPISODES, load_json
+    from capmj.bench.spend import RunBudget
+
     if args.out is None:
         if args.resume:
             raise ConfigError("--resume needs --out DIR (the folder of the run to continue)")
@@ -312,94 +347,154 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     run_budget = RunBudget.resolve(args.max_cost_usd, args.max_tokens, prev_args.get("run_budget"))
     if args.resume and not (args.no_log or args.log_images) and prev_args:
         log, images = bool(prev_args.get("log", True)), bool(prev_args.get("log_images", False))
+    return _Settings(out, stored, tasks_sel, seeds_sel, agent_name, options, workers, concurrency, log, images,
+                     run_budget)
 
-    # ---- validate everything before touching the folder
-    seeds = parse_seeds(seeds_sel)
-    tasks, registered = _resolve_tasks(tasks_sel)
-    agent = make_agent(agent_name, **options)  # validates name and options; workers build their own
-    _confirm_llm_grid(args, agent_name, len(tasks) * len(seeds))
-    agent_label, model = getattr(agent, "name", agent_name), getattr(agent, "model", None)
-    run_budget.check_price(agent)
-    manifest = run_manifest(agent, tasks, stored)
-    _prepare_out(out)
+
+def _validate(args: argparse.Namespace, s: _Settings) -> _Grid:
+    """Seeds, tasks and agent checked (and an LLM grid confirmed) before the folder is touched;
+    then the folder is created and proved writable."""
+    from capmj.agents.factory import make_agent
+    from capmj.bench.manifest import run_manifest
+
+    seeds = parse_seeds(s.seeds_sel)
+    tasks, registered = _resolve_tasks(s.tasks_sel)
+    agent = make_agent(s.agent_name, **s.options)  # validates name and options; workers build their own
+    _confirm_llm_grid(args, s.agent_name, len(tasks) * len(seeds))
+    agent_label, model = getattr(agent, "name", s.agent_name), getattr(agent, "model", None)
+    s.run_budget.check_price(agent)
+    manifest = run_manifest(agent, tasks, s.stored)
+    _prepare_out(s.out)
+    return _Grid(seeds, tasks, registered, agent_label, model, manifest)
+
+
+def _write_config(args: argparse.Namespace, argv: Sequence[str], s: _Settings, g: _Grid) -> None:
+    """``config.json``: the command line, the resolved settings and grid, versions, start/resume times."""
+    from capmj.bench.results import CONFIG, write_result_json
 
     config = {
         "schema": "capmj.bench-config/1",
         "argv": list(argv),
-        "args": {"tasks": tasks_sel, "seeds": seeds_sel, "agent": agent_name, "agent_options": options,
-                 "workers": workers, "concurrency": concurrency, "executor": args.executor,
-                 "max_llm_concurrency": args.max_llm_concurrency, "log": log, "log_images": images,
-                 "run_budget": run_budget.as_dict()},
-        "tasks": tasks, "seeds": seeds, "agent": agent_label, "model": model,
-        "versions": manifest["packages"],
-        "manifest": manifest,
-        "started_at": (stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "resumed_at": list((stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
-                                                                      if args.resume else []),
+        "args": {"tasks": s.tasks_sel, "seeds": s.seeds_sel, "agent": s.agent_name, "agent_options": s.options,
+                 "workers": s.workers, "concurrency": s.concurrency, "executor": args.executor,
+                 "max_llm_concurrency": args.max_llm_concurrency, "log": s.log, "log_images": s.images,
+                 "run_budget": s.run_budget.as_dict()},
+        "tasks": g.tasks, "seeds": g.seeds, "agent": g.agent_label, "model": g.model,
+        "versions": g.manifest["packages"],
+        "manifest": g.manifest,
+        "started_at": (s.stored or {}).get("started_at") or time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "resumed_at": list((s.stored or {}).get("resumed_at") or []) + ([time.strftime("%Y-%m-%dT%H:%M:%S%z")]
+                                                                        if args.resume else []),
     }
-    write_json_atomic(out / CONFIG, config)
+    write_result_json(s.out / CONFIG, config)
 
-    # ---- the episodes still to run
-    existing, bad = read_results(out / EPISODES)
+
+def _plan(s: _Settings, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
+    """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
+    and the grid's size; prints the plan to stderr."""
+    from capmj.bench.grid import Job, rrd_relpath
+    from capmj.bench.results import EPISODES, episode_key, read_results
+    from capmj.bench.spend import BudgetTracker
+
+    existing, bad = read_results(s.out / EPISODES)
     done = {episode_key(r) for r in existing}
-    budget = BudgetTracker(run_budget, existing)
+    budget = BudgetTracker(s.run_budget, existing)
     jobs = []
-    for t in tasks:
-        for s in seeds:
-            if (t, s, agent_label, model) in done:
+    for t in g.tasks:
+        for seed in g.seeds:
+            if (t, seed, g.agent_label, g.model) in done:
                 continue
-            rrd = str((out / rrd_relpath(t, s, agent_label, model)).resolve()) if log else None
-            jobs.append(Job(t, s, rrd))
-    total = len(tasks) * len(seeds)
-    print(f"capmj-bench: {len(tasks)} task(s) × {len(seeds)} seed(s) = {total} episode(s) with agent {agent_label}"
-          + (f" ({model})" if model else "") + f"; {total - len(jobs)} already done, {len(jobs)} to run on "
-          f"{workers} worker(s) × {concurrency} in flight; results in {out}" + (f" (skipped {bad} truncated line(s))" if bad else ""),
+            rrd = str((s.out / rrd_relpath(t, seed, g.agent_label, g.model)).resolve()) if s.log else None
+            jobs.append(Job(t, seed, rrd))
+    total = len(g.tasks) * len(g.seeds)
+    print(f"capmj-bench: {len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "
+          f"{g.agent_label}" + (f" ({g.model})" if g.model else "") + f"; {total - len(jobs)} already done, "
+          f"{len(jobs)} to run on {s.workers} worker(s) × {s.concurrency} in flight; results in {s.out}"
+          + (f" (skipped {bad} truncated line(s))" if bad else ""),
           file=sys.stderr)
+    return jobs, budget, total
 
-    bar = None
-    if not args.no_progress and jobs:
-        from tqdm import tqdm
 
-        bar = tqdm(total=len(jobs), file=sys.stderr, unit="ep", dynamic_ncols=True, mininterval=0.5,
-                   desc="episodes")
-    counts = {"n": 0, "ok": 0}
+class _Progress:
+    """Called with every finished episode: feeds the run budget, counts, and moves the progress bar
+    (a tqdm bar on stderr, when shown and there is something to run)."""
 
-    def progress(rec: dict[str, Any]) -> None:
-        budget.add(rec)
-        counts["n"] += 1
-        counts["ok"] += bool(rec.get("success"))
-        if bar is not None:
-            bar.set_postfix_str(f"success {100 * counts['ok'] / counts['n']:.0f}% ({counts['ok']}/{counts['n']})",
-                                refresh=False)
-            bar.update(1)
+    def __init__(self, budget: BudgetTracker, n_jobs: int, *, show: bool) -> None:
+        self.budget = budget
+        self.n = 0
+        self.ok = 0
+        self.bar: Any = None
+        if show and n_jobs:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=n_jobs, file=sys.stderr, unit="ep", dynamic_ncols=True, mininterval=0.5,
+                            desc="episodes")
+
+    def __call__(self, rec: dict[str, Any]) -> None:
+        self.budget.add(rec)
+        self.n += 1
+        self.ok += bool(rec.get("success"))
+        if self.bar is not None:
+            self.bar.set_postfix_str(f"success {100 * self.ok / self.n:.0f}% ({self.ok}/{self.n})", refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _execute(args: argparse.Namespace, s: _Settings, g: _Grid, jobs: list[Job], budget: BudgetTracker,
+             progress: _Progress) -> tuple[GridStats | None, int | None, float]:
+    """Run the jobs, appending each result to episodes.jsonl as it comes; Ctrl-C, SIGTERM and
+    SIGHUP stop the workers and keep what finished.  Returns (stats or None when stopped, the
+    stopping signal or None, wall seconds)."""
+    from capmj.bench.grid import AgentSpec, run_jobs_to_file
+    from capmj.bench.results import EPISODES, ResultsWriter
 
     interrupted: int | None = None
+    stats: GridStats | None
     t0 = time.perf_counter()
-    with ResultsWriter(out / EPISODES) as writer, _stop_on_signals():
+    with ResultsWriter(s.out / EPISODES) as writer, _stop_on_signals():
         try:
-            stats = run_jobs_to_file(jobs, AgentSpec(agent_name, options, images), workers=workers, out_dir=out,
-                                     writer=writer, progress=progress, registered=registered,
-                                     concurrency=concurrency, max_llm_concurrency=args.max_llm_concurrency,
+            stats = run_jobs_to_file(jobs, AgentSpec(s.agent_name, s.options, s.images), workers=s.workers,
+                                     out_dir=s.out, writer=writer, progress=progress, registered=g.registered,
+                                     concurrency=s.concurrency, max_llm_concurrency=args.max_llm_concurrency,
                                      executor=args.executor, ray_address=args.ray_address, stop=budget.stop)
         except KeyboardInterrupt as exc:
             interrupted = getattr(exc, "signum", signal.SIGINT)
             stats = None
             _stop_resource_tracker()
         finally:
-            if bar is not None:
-                bar.close()
-    elapsed = time.perf_counter() - t0
+            progress.close()
+    return stats, interrupted, time.perf_counter() - t0
 
-    records, _ = read_results(out / EPISODES)
+
+def _write_summary(s: _Settings, stats: GridStats | None, elapsed: float, progress: _Progress,
+                   budget: BudgetTracker) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """summary.json/md/png over every episode in the folder (earlier runs' included), with this
+    run's own figures under "run"; returns the records and the summary."""
+    from capmj.bench.report import write_summary
+    from capmj.bench.results import EPISODES, read_results, summarize
+
+    records, _ = read_results(s.out / EPISODES)
     summary = summarize(records)
-    summary["run"] = {"elapsed_s": elapsed, "episodes_run": counts["n"], "workers": workers,
+    summary["run"] = {"elapsed_s": elapsed, "episodes_run": progress.n, "workers": s.workers,
                       "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
                       "stopped_by_budget": budget.reason}
-    write_summary(out, summary, title=f"capmj benchmark results ({out.name})")
+    write_summary(s.out, summary, title=f"capmj benchmark results ({s.out.name})")
+    return records, summary
+
+
+def _print_outcome(out: Path, summary: dict[str, Any], records: list[dict[str, Any]], total: int, elapsed: float,
+                   progress: _Progress, budget: BudgetTracker, interrupted: int | None) -> int:
+    """Success per configuration on stdout, how to continue a stopped run on stderr; the exit code."""
+    from capmj.bench.report import pct_cell
+    from capmj.bench.results import EPISODES
+
     for label, st in summary["overall"].items():
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
               f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")
-    print(f"ran {counts['n']} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
+    print(f"ran {progress.n} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
     if interrupted is not None:
         print(f"capmj-bench: interrupted by {signal.Signals(interrupted).name}; continue with: "
               f"python -m capmj.bench --out {out} --resume", file=sys.stderr)
@@ -453,7 +548,8 @@ def _stop_resource_tracker() -> None:
     try:
         from multiprocessing import resource_tracker
 
-        resource_tracker._resource_tracker._stop()  # private, but stable since Python 3.8
+        stop = getattr(resource_tracker._resource_tracker, "_stop")  # private (not in typeshed), stable since 3.8
+        stop()
     except Exception:  # noqa: BLE001 - best effort; the tracker ends with us anyway
         pass
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from capmj.atomic import atomic_write
 from capmj.bench.results import (
     CONFIG,
     EPISODES,
@@ -27,7 +28,7 @@ from capmj.bench.results import (
     read_results,
     summarize,
     wilson,
-    write_json_atomic,
+    write_result_json,
 )
 from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
 from capmj.errors import ConfigError
@@ -216,7 +217,9 @@ def plot(summary: Mapping[str, Any], path: str | Path, title: str = "capmj bench
     fig, ax = plt.subplots(figsize=(9, 1.2 + 0.45 * len(rows) * max(1, k * 0.6)))
     y0 = np.arange(len(rows))[::-1]
     for j, lab in enumerate(labels):
-        ys, vals, err = [], [], [[], []]
+        ys: list[float] = []
+        vals: list[float] = []
+        err: list[list[float]] = [[], []]
         for (name, per), y in zip(rows, y0):
             st = per.get(lab)
             if not st or not st["n"]:
@@ -248,10 +251,9 @@ def write_summary(out_dir: str | Path, summary: Mapping[str, Any], *, title: str
     """Write ``summary.json``, ``summary.md`` and (``png``) ``summary.png`` into ``out_dir``."""
     out = Path(out_dir)
     paths = {"json": out / SUMMARY_JSON, "md": out / SUMMARY_MD}
-    write_json_atomic(paths["json"], summary)
-    tmp = paths["md"].with_name(f".{SUMMARY_MD}.tmp")
-    tmp.write_text(markdown(summary, title=title, sources=sources))
-    tmp.replace(paths["md"])
+    write_result_json(paths["json"], summary)
+    with atomic_write(paths["md"], encoding="utf-8") as f:
+        f.write(markdown(summary, title=title, sources=sources))
     if png and summary.get("overall"):
         paths["png"] = plot(summary, out / SUMMARY_PNG, title=title)
     return paths

@@ -18,6 +18,8 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
+from capmj.atomic import write_json_atomic
+
 EPISODES = "episodes.jsonl"
 CONFIG = "config.json"
 SUMMARY_JSON = "summary.json"
@@ -287,21 +289,15 @@ def load_json(path: str | Path) -> dict[str, Any] | None:
         return None
 
 
-def write_json_atomic(path: str | Path, data: Any) -> None:
-    """Write JSON through a temporary file and ``os.replace`` (never a half-written file)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    with open(tmp, "w") as f:
-        json.dump(data, f, indent=2, sort_keys=True, default=_json_default)
-        f.write("\n")
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+def write_result_json(path: str | Path, data: Any) -> None:
+    """A result folder's JSON file (``config.json``, ``summary.json``): indent 2, sorted keys,
+    numpy values as lists; written atomically (:func:`capmj.atomic.write_json_atomic`)."""
+    write_json_atomic(path, data, indent=2, sort_keys=True, default=_json_default)
 
 
 __all__ = [
     "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
     "config_of", "default_label", "episode_key", "load_json", "loop_stats", "read_results", "sanitize", "stats",
     "summarize",
-    "wilson", "write_json_atomic",
+    "wilson", "write_result_json",
 ]

@@ -11,9 +11,10 @@ unwieldy for the scripts that read it.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 from typing import Any, Mapping
+
+from capmj.atomic import atomic_write
 
 __all__ = ["read_calls", "transcript_relpath", "write_calls"]
 
@@ -32,13 +33,9 @@ def write_calls(out_dir: str | Path, rec: dict[str, Any]) -> None:
     rel = transcript_relpath(rec["task"], rec["seed"], rec["agent"], rec.get("model"))
     path = Path(out_dir) / rel
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    with open(tmp, "w", encoding="utf-8") as f:
+    with atomic_write(path, encoding="utf-8") as f:
         for call in calls:
             f.write(json.dumps(call, sort_keys=True, ensure_ascii=False) + "\n")
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
     rec["transcript"] = rel
 
 

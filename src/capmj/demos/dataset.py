@@ -25,8 +25,6 @@ when fusing heightmaps (capmj's cameras are Ravens-like, not Ravens' exact poses
 from __future__ import annotations
 
 import json
-import math
-import os
 import pickle
 import re
 from dataclasses import dataclass
@@ -35,7 +33,10 @@ from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from capmj.atomic import atomic_write
 from capmj.errors import ConfigError
+from capmj.sim import pose as sim_pose
+from capmj.sim.pose import wxyz, xyzw
 
 FIELDS = ("color", "depth", "reward", "info", "action")
 """Written in this order: ``action/`` last, because it is the index both loaders scan."""
@@ -62,19 +63,18 @@ def dataset_dir(out: Path | str, task: str, split: str) -> Path:
 
 
 def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
-    """A rotation about z as an (x, y, z, w) quaternion."""
-    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    """A rotation about z as an (x, y, z, w) quaternion (Ravens' order)."""
+    return xyzw(sim_pose.yaw_quat(yaw))
 
 
 def quat_yaw(q: Sequence[float]) -> float:
     """The z-rotation of an (x, y, z, w) quaternion."""
-    x, y, z, w = (float(v) for v in q)
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return sim_pose.quat_yaw(wxyz(q))
 
 
 def ravens_action(action: Mapping[str, np.ndarray]) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
     """An env action as Ravens' ``{"pose0": (xyz, xyzw), "pose1": (xyz, xyzw)}``."""
-    out = {}
+    out: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
     for key, name in (("pose0", "pick"), ("pose1", "place")):
         v = np.asarray(action[name], dtype=np.float64)
         out[key] = (tuple(float(c) for c in v[:3]), yaw_quat(float(v[3])))
@@ -156,10 +156,8 @@ def write_episode(directory: Path, name: str, record: Mapping[str, Any]) -> None
     for field in FIELDS:
         (directory / field).mkdir(parents=True, exist_ok=True)
         target = directory / field / name
-        tmp = target.with_suffix(".tmp")
-        with open(tmp, "wb") as fh:
+        with atomic_write(target, "wb") as fh:
             pickle.dump(record[field], fh, protocol=PICKLE_PROTOCOL)
-        os.replace(tmp, target)
 
 
 def resume_point(directory: Path) -> tuple[int, int | None]:
@@ -188,9 +186,4 @@ def camera_configs(rig: Any, cameras: Sequence[str]) -> list[dict[str, Any]]:
 
 
 def _matrix_quat_xyzw(r: np.ndarray) -> tuple[float, float, float, float]:
-    import mujoco
-
-    q = np.empty(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(r, dtype=np.float64).ravel())
-    w, x, y, z = (float(v) for v in q)
-    return (x, y, z, w)
+    return xyzw(sim_pose.mat_to_quat(r))

@@ -91,7 +91,8 @@ def record_episode(task: Task | str, seed: int, config: EnvConfig) -> tuple[Epis
     env = TabletopEnv(task, seed=seed, config=config)
     try:
         ts = env.reset()
-        obs, actions, rewards, infos = [ts.observation], [], [0.0], [_info(env)]
+        obs, rewards, infos = [ts.observation], [0.0], [_info(env)]
+        actions: list[dict[str, tuple[tuple[float, ...], tuple[float, ...]]] | None] = []  # None: no action after the last step
 
         def on_step(action: dict[str, np.ndarray], step: Any) -> None:
             actions.append(ravens_action(action))

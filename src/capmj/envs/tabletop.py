@@ -38,7 +38,8 @@ from capmj.errors import AgentError, BudgetExceeded, ConfigError
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.robot import ARM_JOINTS
 from capmj.sim.bounds import WORKSPACE
-from capmj.sim.cameras import IMAGE_H, IMAGE_W
+from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
+from capmj.sim.pose import mat_yaw
 from capmj.sim.scene import HEIGHTMAP_PIXEL
 from capmj.sim.world import World
 from capmj.tasks.protocol import Scene, Task, Verdict, make_scene
@@ -58,7 +59,7 @@ class EnvConfig:
     ``max_steps`` attribute if it has one, else the bench's primitive budget (:class:`Budget`).
     """
 
-    cameras: tuple[str, ...] = ("front", "left", "right")
+    cameras: tuple[str, ...] = VIEW_CAMERAS
     width: int = IMAGE_W
     height: int = IMAGE_H
     segmentation: bool = False
@@ -241,7 +242,7 @@ class TabletopEnv(dm_env.Environment):
         obs["goal"] = np.array(self.scene.goal, dtype=object)
         obs["joint_pos"] = w.arm_q()
         pos, rot = w.tip_pose()
-        obs["tip_pose"] = np.array([pos[0], pos[1], pos[2], math.atan2(rot[1, 0], rot[0, 0])])
+        obs["tip_pose"] = np.array([pos[0], pos[1], pos[2], mat_yaw(rot)])
         obs["suction"] = np.array([0.0 if w.suction.held is None else 1.0])
         return obs
 

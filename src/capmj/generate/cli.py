@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 from capmj.errors import CapmjError
 
@@ -20,7 +21,7 @@ results: DIR/pyproject.toml + DIR/<package>/*.py (installable plugin), DIR/READM
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2
+    def error(self, message: str) -> NoReturn:  # one line, exit 2
         print(f"error: {message} (see --help)", file=sys.stderr)
         raise SystemExit(2)
 

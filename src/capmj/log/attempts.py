@@ -73,7 +73,8 @@ def attempt_markdown(k: int, parts: Mapping[str, str]) -> str:
     verdict = parts.get("verdict", "")
     head = verdict.splitlines()[0].split(" (error:")[0] if verdict else ""  # the error has its own section
     lines = [f"# Attempt {k}" + (f" — {head}" if head else "")]
-    for n in plans or [None]:
+    numbers: list[int | None] = [*plans] or [None]  # no planner call: one section for the attempt
+    for n in numbers:
         base = f"planner/{n}/"
         code = parts.get(base + "code")
         err = parts.get(base + "error") or parts.get("error")

@@ -52,7 +52,8 @@ def episode_blueprint(attempts: int = 0, active_document: str | None = None):  #
     docs += [rrb.TextDocumentView(origin=attempt_entity(k), name=f"attempt {k}")
              for k in range(1, max(ATTEMPT_TABS, attempts) + 1)]
     docs.append(rrb.TextDocumentView(origin=OTHER_TEXTS, name="other texts"))
-    logs = [rrb.TextLogView(origin=PRIMITIVE_LOG, name="primitives"), rrb.TextLogView(origin=SAY_LOG, name="say")]
+    logs: list[rrb.View] = [rrb.TextLogView(origin=PRIMITIVE_LOG, name="primitives"),
+                            rrb.TextLogView(origin=SAY_LOG, name="say")]
     logs += [rrb.Spatial2DView(origin=f"{CAMERA}/{IMAGE_CAMERA}/{kind}", name=f"{IMAGE_CAMERA} {kind}")
              for kind in ("rgb", "depth")]
     layout = rrb.Horizontal(world, rrb.Vertical(rrb.Tabs(*docs, active_tab=active_document), rrb.Tabs(*logs),

@@ -7,12 +7,12 @@ the world is attached (exact), else from the object specs (approximate).
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
 from capmj.log.paths import ROBOT, WORLD, object_entity
+from capmj.sim.pose import xyzw, yaw_quat
 
 if TYPE_CHECKING:
     from capmj.sim.objects import ObjectSpec
@@ -23,11 +23,6 @@ GRIP_COLOR = [255, 140, 0]
 
 def u8(rgba: Sequence[float]) -> list[int]:
     return [int(round(255 * max(0.0, min(1.0, float(c))))) for c in rgba]
-
-
-def xyzw(q_wxyz: Sequence[float]) -> list[float]:
-    w, x, y, z = (float(v) for v in q_wxyz)
-    return [x, y, z, w]
 
 
 def object_label(o: "ObjectSpec") -> str:
@@ -61,7 +56,7 @@ def log_object_specs(rr: Any, rec: Any, objects: Sequence["ObjectSpec"]) -> None
             shape = rr.Boxes3D(half_sizes=[[hx, hy, hz]], colors=[col], fill_mode="solid")
         rec.log(ent, shape, static=True)
         rec.log(ent, rr.Transform3D(translation=list(o.pos),
-                                    quaternion=rr.Quaternion(xyzw=[0, 0, math.sin(o.yaw / 2), math.cos(o.yaw / 2)])))
+                                    quaternion=rr.Quaternion(xyzw=xyzw(yaw_quat(o.yaw)))))
 
 
 def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None,
@@ -162,7 +157,7 @@ def log_robot(rr: Any, rec: Any, model: Any, entities: Mapping[str, str]) -> Non
         return
     bid = model.body(SUCTION_BODY).id
     cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
-    others = [g for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
+    others = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
     parts = body_geoms(rr, model, bid, None, others)
     if parts:
         rec.log(entities[SUCTION_BODY], *parts, static=True)

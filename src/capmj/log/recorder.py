@@ -33,13 +33,15 @@ from capmj.log.images import SceneCameras, depth_mm, image_entity
 from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
                              SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
 from capmj.log.summary import fmt_vec, jsonable, summary_markdown
+from capmj.sim.cameras import VIEW_CAMERAS
+from capmj.sim.pose import xyzw
 
 if TYPE_CHECKING:
     from capmj.sim.objects import ObjectSpec
     from capmj.sim.world import World
 
 APPLICATION_ID = "capmj"
-CAMERAS: tuple[str, ...] = ("front", "left", "right")
+CAMERAS: tuple[str, ...] = VIEW_CAMERAS
 MARKDOWN_TEXTS = frozenset({"goal", "verdict"})
 PICK_COLOR, PLACE_COLOR, PATH_COLOR, FAILED_PATH_COLOR = [255, 210, 0], [40, 150, 255], [200, 200, 200], [230, 60, 60]
 _FLUSH_FRAMES = 4000         # frames buffered before a flush (200 s of simulated time)
@@ -134,7 +136,7 @@ class RerunRecorder:
                 self._static_bodies.add(o.body)
                 self._sent[o.body] = np.concatenate([world.data.xpos[b], world.data.xquat[b]])
                 self.rec.log(f"{OBJECTS}/{o.body}", rr.Transform3D(
-                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=G.xyzw(world.data.xquat[b]))),
+                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=xyzw(world.data.xquat[b]))),
                     static=True)
         m = world.model
         objs = {o.body for o in world.objects}
@@ -183,7 +185,7 @@ class RerunRecorder:
             self.rec.send_columns(ent, indexes=self._index(rows, final_label),
                                   columns=rr.Transform3D.columns(
                                       translation=np.array([r[2][0] for r in rows], dtype=np.float32),
-                                      quaternion=np.array([G.xyzw(r[2][1]) for r in rows], dtype=np.float32)))
+                                      quaternion=np.array([xyzw(r[2][1]) for r in rows], dtype=np.float32)))
 
     def _changed_rows(self, key: str, rows: list) -> list:
         """The rows whose pose differs from the last one sent for ``key`` (latest-at fills the gaps)."""
@@ -283,7 +285,8 @@ class RerunRecorder:
                 continue
             holds = view.holds(p.get("obj_id"))
             col = NEUTRAL_COLOR if holds is None else OK_COLOR if holds else FAIL_COLOR
-            o = self._objects.get(p.get("obj_id"))
+            oid = p.get("obj_id")
+            o = self._objects.get(oid) if oid is not None else None
             half = list(o.half_extents) if o is not None else [0.01, 0.01, 0.01]
             self._stamp(p["time"], p["index"])
             self.rec.log(f"{PRIMITIVES}/{p['index']}/final",
@@ -348,7 +351,8 @@ class RerunRecorder:
             self.rec.send_blueprint(episode_blueprint(attempts), make_active=True, make_default=True)
         except Exception:  # noqa: BLE001 - a layout is a convenience; the data is already written
             pass
-        rec, self.rec = self.rec, None
+        rec = self.rec
+        del self.rec  # a closed recorder has no stream (using it raises AttributeError)
         rec.flush()
         rec.disconnect()
         # Drop the stream now: its writer/batcher threads live as long as the Python object, and the

@@ -97,7 +97,7 @@ def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) ->
     out: list[LinkMesh] = []
     for name in bodies:
         bid = model.body(name).id
-        geoms = [g for g in np.flatnonzero(model.geom_bodyid == bid)
+        geoms = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid)
                  if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == VISUAL_GROUP]
         verts, faces, norms, cols = [], [], [], []
         offset = 0

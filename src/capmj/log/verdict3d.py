@@ -19,6 +19,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from capmj.log.paths import VERDICT, object_entity
+from capmj.sim.pose import Vector
 
 FAIL_COLOR = [255, 40, 40]
 OK_COLOR = [60, 210, 90]
@@ -88,7 +89,7 @@ def verdict_view(success: bool, diagnostics: Sequence[str], kinds: Mapping[int, 
     return VerdictView(success, {k: tuple(v) for k, v in failing.items()}, tuple(named), in_goal)
 
 
-def goal_target(obj_id: int, final_pos: Sequence[float], goals: Sequence[Any]) -> np.ndarray | None:
+def goal_target(obj_id: int, final_pos: Vector, goals: Sequence[Any]) -> np.ndarray | None:
     """Where the oracle goals want ``obj_id``: the nearest (in xy) target it may go to, or None."""
     best, best_d = None, np.inf
     p = np.asarray(final_pos, dtype=float)

@@ -42,6 +42,11 @@ class Bounds:
         return (self.xmin, self.xmax, self.ymin, self.ymax)
 
     @property
+    def xyxy(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)``: shapely's order, and the planner API's for areas."""
+        return (self.xmin, self.ymin, self.xmax, self.ymax)
+
+    @property
     def center(self) -> tuple[float, float]:
         return ((self.xmin + self.xmax) / 2, (self.ymin + self.ymax) / 2)
 

@@ -50,9 +50,10 @@ from capmj.sim.bounds import WORKSPACE
 from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
+"""The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal):
+the one list of camera names; the recorder and the env default to it."""
 IMAGE_W, IMAGE_H = 640, 480
 """Default image size of the view cameras (RealSense-D415-like, as in Ravens)."""
-"""The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal)."""
 DEPTH_BACKGROUND = 4.99
 """Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
 

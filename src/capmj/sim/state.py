@@ -14,7 +14,7 @@ from typing import Iterator, Mapping, Sequence
 import numpy as np
 
 from capmj.sim.objects import ObjectSpec
-from capmj.sim.pose import mat_yaw, quat_to_mat, yaw_quat
+from capmj.sim.pose import mat_yaw, quat_to_mat, xyzw, yaw_quat
 
 
 @dataclass(frozen=True)
@@ -52,8 +52,7 @@ class Pose:
     @property
     def xquat(self) -> tuple[float, float, float, float]:
         """The same quaternion as (x, y, z, w), the planner API's and rerun's convention."""
-        w, x, y, z = self.quat
-        return (x, y, z, w)
+        return xyzw(self.quat)
 
 
 @dataclass(frozen=True)

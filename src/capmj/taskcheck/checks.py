@@ -38,11 +38,12 @@ from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 from capmj.errors import ConfigError
+from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import BLOCK_SIZES, KINDS
 from capmj.sim.palette import COLOR_NAMES, COOL, WARM
 from capmj.sim.state import SceneState
 from capmj.taskcheck.report import CHECKS, CheckResult, Report
-from capmj.tasks.predicates import WORKSPACE_X, WORKSPACE_Y, WORKSPACE_Z, ravens_reward
+from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import OracleGoal, Scene, Task, make_scene
 from capmj.tasks.registry import validate_task
 
@@ -141,16 +142,14 @@ def _scenes(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str
         for g in goals:
             for t in g.targets:
                 x, y, z = t.pos
-                inside = (WORKSPACE_X[0] - _TARGET_MARGIN <= x <= WORKSPACE_X[1] + _TARGET_MARGIN
-                          and WORKSPACE_Y[0] - _TARGET_MARGIN <= y <= WORKSPACE_Y[1] + _TARGET_MARGIN
-                          and 0.0 < z <= WORKSPACE_Z[1])
+                inside = bool(WORKSPACE.contains(x, y, _TARGET_MARGIN)) and WORKSPACE.zmin < z <= WORKSPACE.zmax
                 if not inside:
                     problems.append(f"seed {s}: oracle target {tuple(round(v, 3) for v in t.pos)} is outside the workspace")
     layouts = {tuple((o.kind, o.color, o.pos) for o in sc.objects) for sc in scenes.values()}
     if len(cfg.seeds) > 1 and len(layouts) == 1:
         problems.append(f"all {len(cfg.seeds)} seeds gave the same scene (generate ignores its rng)")
-    goals = sorted({sc.goal for sc in scenes.values()})
-    return f"{len(cfg.seeds)} seeds, {len(layouts)} distinct layouts", {"goals": goals[:5]}, problems
+    goal_texts = sorted({sc.goal for sc in scenes.values()})
+    return f"{len(cfg.seeds)} seeds, {len(layouts)} distinct layouts", {"goals": goal_texts[:5]}, problems
 
 
 def _goal_text(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str]]:
@@ -220,7 +219,7 @@ def _reward_agrees(task: Task, cfg: CheckConfig, cache: dict[str, Any]) -> tuple
 
 def _protocol(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str]]:
     problems = validate_task(task, cfg.name)
-    tags = getattr(task, "tags", frozenset())
+    tags: Any = getattr(task, "tags", frozenset())  # a plugin's attribute: any type; validate_task reports a bad one
     missing = sorted(cfg.required_tags - set(tags)) if isinstance(tags, (set, frozenset)) else []
     if missing:
         problems.append(f"its tags lack {', '.join(map(repr, missing))}")

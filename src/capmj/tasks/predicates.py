@@ -16,7 +16,9 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, ZONE_SIZE, ObjectSpec
+from capmj.sim.pose import Vector, from_frame_2d, to_frame_2d
 from capmj.sim.state import SceneState
 
 PLANE_TOL = 0.01
@@ -34,12 +36,15 @@ STACK_AXIS_TOL = 0.02
 MOVE_TOL = 0.03
 """An object "did not move" when its centre ends within this distance (m) of its start."""
 
-WORKSPACE_X = (0.25, 0.75)
-WORKSPACE_Y = (-0.5, 0.5)
-WORKSPACE_Z = (0.0, 0.3)
+WORKSPACE_X = (WORKSPACE.xmin, WORKSPACE.xmax)
+WORKSPACE_Y = (WORKSPACE.ymin, WORKSPACE.ymax)
+WORKSPACE_Z = (WORKSPACE.zmin, WORKSPACE.zmax)
+"""The workspace's ranges (m), from :data:`capmj.sim.bounds.WORKSPACE`."""
 
-_AREA_X = {"top": (0.25, 0.5), "bottom": (0.5, 0.75)}
-_AREA_Y = {"left": (-0.5, 0.0), "right": (0.0, 0.5)}
+_SPLIT_X, _SPLIT_Y = WORKSPACE.center
+"""The lines that halve the workspace: x = 0.5 (top | bottom) and y = 0 (left | right)."""
+_AREA_X = {"top": (WORKSPACE.xmin, _SPLIT_X), "bottom": (_SPLIT_X, WORKSPACE.xmax)}
+_AREA_Y = {"left": (WORKSPACE.ymin, _SPLIT_Y), "right": (_SPLIT_Y, WORKSPACE.ymax)}
 AREA_NAMES: tuple[str, ...] = (
     "top", "bottom", "left", "right", "top left", "top right", "bottom left", "bottom right",
 )
@@ -70,7 +75,7 @@ def area_bounds(area: str) -> tuple[float, float, float, float]:
     return (x[0], x[1], y[0], y[1])
 
 
-def in_area(pos: Sequence[float], area: str | tuple[float, float, float, float]) -> bool:
+def in_area(pos: Vector, area: str | tuple[float, float, float, float]) -> bool:
     """Whether the xy of ``pos`` lies in the area (a name or ``(xmin, xmax, ymin, ymax)``).
 
     Tolerance: none.  Bounds are inclusive on the workspace edges; the split lines x = 0.5 and
@@ -79,7 +84,7 @@ def in_area(pos: Sequence[float], area: str | tuple[float, float, float, float])
     """
     b = area_bounds(area) if isinstance(area, str) else area
     x, y = float(pos[0]), float(pos[1])
-    return _in_closed_or_split(x, b[0], b[1], 0.5) and _in_closed_or_split(y, b[2], b[3], 0.0)
+    return _in_closed_or_split(x, b[0], b[1], _SPLIT_X) and _in_closed_or_split(y, b[2], b[3], _SPLIT_Y)
 
 
 def _in_closed_or_split(v: float, lo: float, hi: float, split: float) -> bool:
@@ -89,13 +94,9 @@ def _in_closed_or_split(v: float, lo: float, hi: float, split: float) -> bool:
 
 
 # --------------------------------------------------------------------------------------- zones
-def zone_local_xy(state: SceneState, zone_id: int, xy: Sequence[float]) -> np.ndarray:
+def zone_local_xy(state: SceneState, zone_id: int, xy: Vector) -> np.ndarray:
     """``xy`` expressed in the zone's frame (origin at its centre, axes along its sides)."""
-    c = state.pos(zone_id)[:2]
-    yaw = state.poses[zone_id].yaw
-    d = np.asarray(xy[:2], dtype=float) - c
-    cs, sn = math.cos(yaw), math.sin(yaw)
-    return np.array([cs * d[0] + sn * d[1], -sn * d[0] + cs * d[1]])
+    return to_frame_2d(xy[:2], state.poses[zone_id].yaw, state.pos(zone_id)[:2])
 
 
 def zone_half_size(spec: ObjectSpec) -> float:
@@ -132,9 +133,14 @@ def bowl_rim_z(state: SceneState, bowl_id: int) -> float:
     return float(state.pos(bowl_id)[2]) + BOWL_HEIGHT / 2
 
 
-def bowl_floor_z(state_or_pos: SceneState | Sequence[float], bowl_id: int | None = None) -> float:
+def bowl_floor_z(state_or_pos: SceneState | Vector, bowl_id: int | None = None) -> float:
     """World z (m) of the top of a bowl's floor (bowl centre z − BOWL_HEIGHT/2 + BOWL_FLOOR)."""
-    z = float(state_or_pos.pos(bowl_id)[2]) if isinstance(state_or_pos, SceneState) else float(state_or_pos[2])
+    if isinstance(state_or_pos, SceneState):
+        if bowl_id is None:
+            raise TypeError("bowl_floor_z(state, bowl_id): the bowl's id is needed with a state")
+        z = float(state_or_pos.pos(bowl_id)[2])
+    else:
+        z = float(state_or_pos[2])
     return z - BOWL_HEIGHT / 2 + BOWL_FLOOR
 
 
@@ -246,14 +252,14 @@ def build_tower(
 
 
 # --------------------------------------------------------------------------------------- motion
-def moved_less_than(state: SceneState, obj_id: int, start_pos: Sequence[float], tol: float = MOVE_TOL) -> bool:
+def moved_less_than(state: SceneState, obj_id: int, start_pos: Vector, tol: float = MOVE_TOL) -> bool:
     """Whether the object's centre ends within ``tol`` (default 0.03 m, 3-D distance) of
     ``start_pos``."""
     return float(np.linalg.norm(state.pos(obj_id) - np.asarray(start_pos, dtype=float))) <= tol
 
 
 # --------------------------------------------------------------------------------------- shapes
-def fit_circle(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, float, float]:
+def fit_circle(points: Sequence[Vector]) -> tuple[np.ndarray, float, float]:
     """Least-squares circle through the xy of ``points``: ``(centre_xy, radius, max_residual)``.
 
     ``max_residual`` is the largest |distance to centre − radius| (m).  Fewer than three points or
@@ -283,7 +289,7 @@ def fit_circle(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, float, fl
 
 
 def is_grid(
-    points: Sequence[Sequence[float]],
+    points: Sequence[Vector],
     rows: int,
     cols: int,
     pitch_range: tuple[float, float] = (0.04, 0.06),
@@ -308,8 +314,7 @@ def is_grid(
     v = p[nn] - p
     ang = np.arctan2(v[:, 1], v[:, 0])
     theta = math.atan2(np.sin(4 * ang).sum(), np.cos(4 * ang).sum()) / 4
-    cs, sn = math.cos(theta), math.sin(theta)
-    local = np.column_stack([cs * p[:, 0] + sn * p[:, 1], -sn * p[:, 0] + cs * p[:, 1]])
+    local = to_frame_2d(p, theta)
     reasons = []
     for r_, c_, lc in ((rows, cols, local), (cols, rows, local[:, ::-1]),
                        (rows, cols, local[:, ::-1]), (cols, rows, local)):
@@ -349,10 +354,7 @@ def _pose_match(state: SceneState, obj_id: int, goal, target) -> bool:
     t = target.pos
     if goal.metric == "zone":
         half = goal.zone_size / 2
-        d = p[:2] - np.asarray(t[:2], dtype=float)
-        yaw = target.yaw or 0.0
-        cs, sn = math.cos(yaw), math.sin(yaw)
-        lx, ly = cs * d[0] + sn * d[1], -sn * d[0] + cs * d[1]
+        lx, ly = to_frame_2d(p[:2], target.yaw or 0.0, t[:2])
         return abs(lx) <= half and abs(ly) <= half
     if math.hypot(p[0] - t[0], p[1] - t[1]) > goal.tolerance or abs(p[2] - t[2]) > Z_TOL:
         return False
@@ -364,8 +366,9 @@ def _pose_match(state: SceneState, obj_id: int, goal, target) -> bool:
     return True
 
 
-def _max_matching(adj: list[list[int]], n_targets: int) -> int:
-    """Size of a maximum bipartite matching (Kuhn's augmenting paths; goals are small)."""
+def max_matching(adj: Sequence[Sequence[int]], n_targets: int) -> int:
+    """Size of a maximum bipartite matching of objects to targets, ``adj[i]`` listing the targets
+    (``0 <= j < n_targets``) object ``i`` may take (Kuhn's augmenting paths; goals are small)."""
     owner = [-1] * n_targets
 
     def augment(i: int, seen: list[bool]) -> bool:
@@ -400,7 +403,7 @@ def ravens_reward(goals: Sequence, state: SceneState) -> float:
         total += len(g.objects)
         adj = [[j for j, t in enumerate(g.targets) if g.matches[i][j] and _pose_match(state, oid, g, t)]
                for i, oid in enumerate(g.objects)]
-        matched += sum(1 for a in adj if a) if g.replace else _max_matching(adj, len(g.targets))
+        matched += sum(1 for a in adj if a) if g.replace else max_matching(adj, len(g.targets))
     return matched / total if total else 0.0
 
 
@@ -420,7 +423,7 @@ __all__ = [
     "AREA_NAMES", "BOWL_TOL", "MOVE_TOL", "PLANE_TOL", "QUADRANTS", "STACK_AXIS_TOL", "TILT_TOL", "YAW_TOL",
     "Z_TOL", "WORKSPACE_X", "WORKSPACE_Y", "WORKSPACE_Z",
     "area_bounds", "bowl_floor_z", "bowl_rim_z", "build_tower", "find_stack_order", "fit_circle", "in_area",
-    "in_bowl", "in_zone", "is_grid", "is_stack", "moved_less_than", "objects_in_zone", "positions",
+    "in_bowl", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
     "ravens_reward", "resting_on", "resting_on_table", "short_label", "toppled", "zone_half_size",
     "zone_local_xy", "zone_outside_distance",
 ]
@@ -525,9 +528,9 @@ class RowReport:
 
 
 def row_on_line(
-    points: Sequence[Sequence[float]],
-    line_point: Sequence[float],
-    line_dir: Sequence[float],
+    points: Sequence[Vector],
+    line_point: Vector,
+    line_dir: Vector,
     pitch: float,
     *,
     line_tol: float = ROW_LINE_TOL,
@@ -561,7 +564,7 @@ def row_on_line(
                      tuple(float(g) for g in gaps), mid, tuple(reasons))
 
 
-def fixture_slots(origin: Sequence[float], yaw: float, clearance: float = 0.0) -> np.ndarray:
+def fixture_slots(origin: Vector, yaw: float, clearance: float = 0.0) -> np.ndarray:
     """(3, 3) world centres of a small block in each slot of an L-fixture whose origin (slot
     (0, 0), as ``get_obj_pos`` reports it) is ``origin`` and whose yaw is ``yaw``.
 
@@ -571,14 +574,11 @@ def fixture_slots(origin: Sequence[float], yaw: float, clearance: float = 0.0) -
     neighbours, and stays well within ``SLOT_TOL`` of the slot centre.
     """
     o = np.asarray(origin, dtype=float)
-    cs, sn = math.cos(yaw), math.sin(yaw)
     shift = ((1, 1), (2, 1), (1, 2))
     z = float(o[2]) - FIXTURE_HEIGHT / 2 + FIXTURE_SLOT / 2
-    out = []
-    for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift):
-        u, v = u + clearance * du, v + clearance * dv
-        out.append((o[0] + cs * u - sn * v, o[1] + sn * u + cs * v, z))
-    return np.array(out)
+    uv = [(u + clearance * du, v + clearance * dv) for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift)]
+    xy = from_frame_2d(uv, yaw, o[:2])
+    return np.column_stack([xy, np.full(len(xy), z)])
 
 
 def slot_occupants(state: SceneState, fixture_id: int, ids: Iterable[int], tol: float = SLOT_TOL) -> list[int | None]:
@@ -624,9 +624,7 @@ def footprint(state: SceneState, obj_id: int):
     if pose.tilt > TILT_TOL:
         ext = np.abs(pose.rotation) @ np.array([hx, hy, hz])
         return box(c[0] - ext[0], c[1] - ext[1], c[0] + ext[0], c[1] + ext[1])
-    cs, sn = math.cos(pose.yaw), math.sin(pose.yaw)
-    corners = [(c[0] + cs * u - sn * v, c[1] + sn * u + cs * v) for u, v in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
-    return Polygon(corners)
+    return Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], pose.yaw, c[:2]))
 
 
 def footprint_outside_zone(state: SceneState, obj_id: int, zone_id: int) -> float:
@@ -691,12 +689,12 @@ def circle_of(state: SceneState, ids: Sequence[int], tol: float = CIRCLE_TOL,
     return True, c, r, f"circle of radius {r:.3f} m at ({c[0]:.3f}, {c[1]:.3f})"
 
 
-def angular_order(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> list[int]:
+def angular_order(state: SceneState, ids: Sequence[int], centre: Vector) -> list[int]:
     """``ids`` sorted by the angle of their xy centre around ``centre``."""
     return sorted(ids, key=lambda i: math.atan2(state.pos(i)[1] - centre[1], state.pos(i)[0] - centre[0]))
 
 
-def alternates(state: SceneState, ids: Sequence[int], centre: Sequence[float]) -> tuple[bool, str]:
+def alternates(state: SceneState, ids: Sequence[int], centre: Vector) -> tuple[bool, str]:
     """Whether colours alternate going round ``centre`` (cyclically: two colours, equal counts,
     no two angular neighbours of one colour); the reason names a same-coloured neighbour pair."""
     order = angular_order(state, ids, centre)

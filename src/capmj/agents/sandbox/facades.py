@@ -54,6 +54,8 @@ class _Facade:
     """A read-only namespace exposing only ``members``; stands in for a module."""
 
     __slots__ = ("_name", "_members")
+    _name: str
+    _members: Mapping[str, object]
 
     def __init__(self, name: str, members: Mapping[str, object]) -> None:
         object.__setattr__(self, "_name", name)
