@@ -4,8 +4,10 @@ Random pick-and-places of small and big blocks across the workspace, onto the ta
 blocks, in worlds rebuilt every ``--per-world`` trials.  A trial succeeds when the carried block
 ends within 1 cm (xy) and 1.5 cm (z) of its target, upright.  Wall time per primitive is measured
 without rendering on every trial, and with the three cameras + heightmap rendered once after each
-primitive on ``--rendered`` extra trials, once with the arm's visual meshes and once with its
-collision capsules (``CameraRig(robot_meshes=False)``).  The stacking part builds towers of 2–8 small blocks.
+primitive on ``--rendered`` extra trials: RGB + depth of the three views (one pass each, mesh arm),
+then everything (segmentation and heightmap too) with the arm's visual meshes and with its
+collision capsules (``CameraRig(robot_meshes=False)``).  Speed-ups are against the PyBullet Ravens
+oracle with its EGL renderer (constants below).  The stacking part builds towers of 2–8 small blocks.
 
     python benchmarks/primitives.py [--trials 1000] [--seed 0]
 """
@@ -28,6 +30,11 @@ from capmj.sim.world import World  # noqa: E402
 from capmj.tasks import predicates as P  # noqa: E402
 from capmj.tasks.spawn import Spawner, free_positions  # noqa: E402
 
+RAVENS_EGL_S = {"fast": 0.92, "slow": 1.14}
+"""PyBullet Ravens oracle, EGL renderer on, per pick-and-place without observations (issue #17's
+side-by-side run on this machine; PyBullet is not installed here, so it is quoted, not re-run)."""
+RAVENS_EGL_RENDERED_S = {"fast": 1.30, "slow": 1.85}
+"""The same with its three RGB-D cameras rendered after each action."""
 COLORS = ["red", "blue", "green", "yellow", "orange", "purple", "pink", "cyan"]
 
 
@@ -149,23 +156,26 @@ def main(argv: list[str] | None = None) -> int:
 
     rendered: dict[str, float | None] = {}
     render_note = None
-    for label, meshes in (("mesh_arm", True), ("capsule_arm", False)):
+    modes = (("mesh_arm_rgbd", True, {"seg": False, "heightmap": False}),  # RGB + depth of the 3 views
+             ("mesh_arm", True, {}), ("capsule_arm", False, {}))          # + segmentation + heightmap
+    for label, meshes, what in modes:
         try:
             from capmj.sim.cameras import CameraRig
 
             w = random_world(rng)
             w.settle()
             prims, rig = Primitives(w), CameraRig(w, robot_meshes=meshes)
+            rig.render_all(**what)  # warm-up: GL context, mesh upload (one-off costs, see render.py)
             wall = 0.0
             for _ in range(args.rendered):
                 t0 = time.perf_counter()
                 one_trial(w, prims, rng)
-                rig.render_all()
+                rig.render_all(**what)
                 wall += time.perf_counter() - t0
             rig.close()
             rendered[label] = wall / args.rendered if args.rendered else None
         except Exception as exc:  # noqa: BLE001 - report, don't hide the other figures
-            render_note = f"{type(exc).__name__}: {exc}"
+            render_note = f"{label}: {type(exc).__name__}: {exc}"
             rendered[label] = None
 
     stack = {}
@@ -184,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         "placement_error_m_p99": float(np.percentile(err, 99)),
         "wall_s_per_primitive": wall_plain / args.trials,
         "wall_s_per_pick_and_place_call": wall_prim / args.trials,
+        "wall_s_per_primitive_rendered_rgbd": rendered.get("mesh_arm_rgbd"),
         "wall_s_per_primitive_rendered": rendered.get("mesh_arm"),
         "wall_s_per_primitive_rendered_capsule_arm": rendered.get("capsule_arm"),
         "rendered_trials": args.rendered,
@@ -191,7 +202,10 @@ def main(argv: list[str] | None = None) -> int:
         "sim_s_per_primitive": sim_s / args.trials,
         "physics_steps_per_s": steps / wall_plain,
         "mj_step_share_of_wall": step_share,
-        "speedup_vs_pybullet_ravens_3.2s": 3.2 / (wall_plain / args.trials),
+        "speedup_vs_ravens_egl": {k: round(v / (wall_plain / args.trials), 1) for k, v in RAVENS_EGL_S.items()},
+        "speedup_vs_ravens_egl_rendered_rgbd": (
+            {k: round(v / rendered["mesh_arm_rgbd"], 1) for k, v in RAVENS_EGL_RENDERED_S.items()}
+            if rendered.get("mesh_arm_rgbd") else None),
         "stack_success_by_height": stack,
         "stack_trials_per_height": args.stack_trials,
         "failures": failures[:20],
