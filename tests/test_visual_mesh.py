@@ -57,3 +57,23 @@ def test_cluster_merges_vertices_of_a_cell_and_drops_collapsed_faces() -> None:
     f = np.array([[0, 1, 2], [0, 2, 3], [1, 2, 3]])
     nv, nf = cluster(v, f, 0.01)
     assert len(nv) == 3 and len(nf) == 1  # vertices 0 and 1 merge; face 0 collapses, 1 and 2 coincide
+
+
+def test_light_meshes_are_cached_on_disk_and_a_damaged_cache_is_recomputed(
+        tmp_path, monkeypatch: pytest.MonkeyPatch) -> None:  # noqa: ANN001
+    from capmj.sim import visual_mesh
+
+    monkeypatch.setenv(visual_mesh.CACHE_ENV, str(tmp_path))
+    xml = str(robot.robot_source().xml_path)
+    compute = visual_mesh._light_meshes.__wrapped__  # bypass the in-process memo
+    first = compute(xml)
+    files = list(tmp_path.glob("ur5e-visual-*.npz"))
+    assert len(files) == 1
+    calls = []
+    monkeypatch.setattr(visual_mesh, "_compute", lambda path: calls.append(path) or first)
+    again = compute(xml)
+    assert not calls and again.keys() == first.keys()
+    assert all(np.array_equal(again[k][0], first[k][0]) and np.array_equal(again[k][1], first[k][1]) for k in first)
+    files[0].write_bytes(b"PK\x03\x04 damaged")
+    compute(xml)
+    assert calls == [xml]

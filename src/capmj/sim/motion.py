@@ -189,8 +189,9 @@ class Motion:
     def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None, max_steps: int = 20000) -> tuple[bool, int]:
         """Track a plan with velocity feed-forward; returns (stopped_early, steps).
 
-        The whole control sequence is interpolated up front (vectorised), so the per-step Python
-        work is one row copy, the physics step and the optional stop check.
+        The whole control sequence is interpolated up front (vectorised) and stepped by
+        :meth:`World.step_controls`, so the per-step Python work is one row copy, the physics step
+        and the optional stop check.
         """
         w = self.world
         ts = w.model.opt.timestep
@@ -211,14 +212,10 @@ class Motion:
                 + (inertia / self._kp) * acc[i]
         else:
             ctrl = np.empty((0, 6))
-        steps = 0
-        for row in ctrl:
-            w.data.ctrl[:6] = row
-            w.step()
-            steps += 1
-            if stop is not None and stop():
-                w.data.ctrl[:6] = w.arm_q()
-                return True, steps
+        steps, stopped = w.step_controls(ctrl, stop)
+        if stopped:
+            w.data.ctrl[:6] = w.arm_q()
+            return True, steps
         w.data.ctrl[:6] = qs[-1]
         return False, steps
 

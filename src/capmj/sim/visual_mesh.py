@@ -10,16 +10,24 @@ physics bit-identical, tested).
 
 Simplification, per mesh: ``trimesh`` welds MuJoCo's per-face vertex copies, vertex clustering on
 a fine grid closes the seams that stop an edge-collapse simplifier, then quadric decimation
-(``fast-simplification``) removes most of what is left.  The result depends only on the meshes, so
-it is computed once per process.
+(``fast-simplification``) removes most of what is left.  The result depends only on the mesh
+files and these parameters: it is computed once (~2 s: a full compile plus the decimation), kept in
+memory for the process and in ``$CAPMJ_CACHE_DIR`` (default ``~/.cache/capmj``) on disk, keyed by a
+hash of the robot's XML, its mesh files and the parameters.  An unwritable cache only costs time.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+import zipfile
 from functools import cache
+from pathlib import Path
 
 import mujoco
 import numpy as np
+
+CACHE_ENV = "CAPMJ_CACHE_DIR"
 
 VISUAL_CLUSTER_M = 0.003
 """Grid size (m) of the vertex clustering of the rendered arm meshes."""
@@ -77,15 +85,54 @@ def _mesh_frame_vertices(model: mujoco.MjModel, mesh: int) -> tuple[np.ndarray, 
     return v, np.asarray(model.mesh_face[fa:fa + fn], dtype=np.int64)
 
 
+def cache_dir() -> Path:
+    """Where capmj keeps derived data between processes (``$CAPMJ_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/capmj``, else ``~/.cache/capmj``)."""
+    if os.environ.get(CACHE_ENV, "").strip():
+        return Path(os.environ[CACHE_ENV].strip())
+    base = os.environ.get("XDG_CACHE_HOME", "").strip() or str(Path.home() / ".cache")
+    return Path(base) / "capmj"
+
+
+def _cache_key(xml_path: str) -> str:
+    """Hash of the XML, every mesh file it names and the simplification parameters."""
+    xml = Path(xml_path)
+    spec = mujoco.MjSpec.from_file(xml_path)  # parsing only: cheap
+    h = hashlib.sha256(f"{VISUAL_CLUSTER_M}|{VISUAL_KEEP_FACES}|{mujoco.__version__}".encode())
+    h.update(xml.read_bytes())
+    for mesh in spec.meshes:
+        h.update(mesh.name.encode())
+        h.update((xml.parent / spec.meshdir / mesh.file).read_bytes())
+    return h.hexdigest()[:24]
+
+
+def _compute(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    model = mujoco.MjSpec.from_file(xml_path).compile()
+    return {model.mesh(i).name: simplify(*_mesh_frame_vertices(model, i), VISUAL_CLUSTER_M, VISUAL_KEEP_FACES)
+            for i in range(model.nmesh)}
+
+
 @cache
-def _light_meshes(xml_path: str) -> dict[str, tuple[tuple[float, ...], tuple[int, ...]]]:
-    spec = mujoco.MjSpec.from_file(xml_path)
-    model = spec.compile()
-    out = {}
-    for i in range(model.nmesh):
-        v, f = simplify(*_mesh_frame_vertices(model, i), VISUAL_CLUSTER_M, VISUAL_KEEP_FACES)
-        out[model.mesh(i).name] = (tuple(v.ravel().tolist()), tuple(int(k) for k in f.ravel()))
-    return out
+def _light_meshes(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    path = cache_dir() / f"ur5e-visual-{_cache_key(xml_path)}.npz"
+    try:
+        with np.load(path) as z:
+            names = [str(n) for n in z["names"]]
+            return {n: (z[f"v{k}"], z[f"f{k}"]) for k, n in enumerate(names)}
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):  # missing or damaged: recompute
+        pass
+    meshes = _compute(xml_path)
+    arrays: dict[str, np.ndarray] = {"names": np.array(list(meshes))}
+    for k, (v, f) in enumerate(meshes.values()):
+        arrays[f"v{k}"], arrays[f"f{k}"] = v, f
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, **arrays)  # type: ignore[arg-type]
+        os.replace(tmp, path)  # atomic: concurrent workers never read half a file
+    except OSError:
+        pass
+    return meshes
 
 
 def use_light_meshes(spec: mujoco.MjSpec, xml_path: str) -> None:
@@ -95,8 +142,8 @@ def use_light_meshes(spec: mujoco.MjSpec, xml_path: str) -> None:
         vert, face = light[mesh.name]
         mesh.file = ""
         mesh.scale = [1.0, 1.0, 1.0]
-        mesh.uservert = list(vert)
-        mesh.userface = list(face)
+        mesh.uservert = vert.ravel().tolist()
+        mesh.userface = face.ravel().tolist()
 
 
-__all__ = ["VISUAL_CLUSTER_M", "VISUAL_KEEP_FACES", "cluster", "simplify", "use_light_meshes"]
+__all__ = ["CACHE_ENV", "VISUAL_CLUSTER_M", "cache_dir", "VISUAL_KEEP_FACES", "cluster", "simplify", "use_light_meshes"]
