@@ -4,8 +4,10 @@ Random pick-and-places of small and big blocks across the workspace, onto the ta
 blocks, in worlds rebuilt every ``--per-world`` trials.  A trial succeeds when the carried block
 ends within 1 cm (xy) and 1.5 cm (z) of its target, upright.  Wall time per primitive is measured
 without rendering on every trial, and with the three cameras + heightmap rendered once after each
-primitive on ``--rendered`` extra trials, once with the arm's visual meshes and once with its
-collision capsules (``CameraRig(robot_meshes=False)``).  The stacking part builds towers of 2–8 small blocks.
+primitive on ``--rendered`` extra trials: RGB + depth of the three views (one pass each, mesh arm),
+then everything (segmentation and heightmap too) with the arm's visual meshes and with its
+collision capsules (``CameraRig(robot_meshes=False)``).  Speed-ups are against the PyBullet Ravens
+oracle with its EGL renderer (constants below).  The stacking part builds towers of 2–8 small blocks.
 
     python benchmarks/primitives.py [--trials 1000] [--seed 0]
 """
@@ -28,6 +30,11 @@ from capmj.sim.world import World  # noqa: E402
 from capmj.tasks import predicates as P  # noqa: E402
 from capmj.tasks.spawn import Spawner, free_positions  # noqa: E402
 
+RAVENS_EGL_S = {"fast": 0.92, "slow": 1.14}
+"""PyBullet Ravens oracle, EGL renderer on, per pick-and-place without observations (issue #17's
+side-by-side run on this machine; PyBullet is not installed here, so it is quoted, not re-run)."""
+RAVENS_EGL_RENDERED_S = {"fast": 1.30, "slow": 1.85}
+"""The same with its three RGB-D cameras rendered after each action."""
 COLORS = ["red", "blue", "green", "yellow", "orange", "purple", "pink", "cyan"]
 
 
@@ -64,7 +71,8 @@ def random_world(rng: np.random.Generator) -> World:
     return World(sp.objects)
 
 
-def one_trial(w: World, prims: Primitives, rng: np.random.Generator) -> tuple[bool, float, str]:
+def one_trial(w: World, prims: Primitives, rng: np.random.Generator) -> tuple[bool, float, str, float]:
+    """One random pick-and-place: (success, xy placement error, kind, wall seconds of the primitive)."""
     state = w.state()
     tops = {i: i for i in w.movable_ids}
     for i in w.movable_ids:  # objects with something on top cannot be picked or stacked onto
@@ -88,12 +96,14 @@ def one_trial(w: World, prims: Primitives, rng: np.random.Generator) -> tuple[bo
             spot = free_positions(current, (0.25, 0.75, -0.5, 0.5), [spec.footprint_radius])[0]
         target = np.array([spot[0], spot[1], spec.half_extents[2]])
         kind = "table"
+    wall0 = time.perf_counter()
     res = prims.pick_and_place(state.pos(obj), target, float(rng.uniform(-np.pi, np.pi)))
+    wall = time.perf_counter() - wall0
     final = np.asarray(w.pose(obj).pos)
     err = float(np.linalg.norm(final[:2] - target[:2]))
     ok = res.ok and res.obj_id == obj and err < 0.01 and abs(final[2] - target[2]) < 0.015 \
         and w.pose(obj).tilt < np.radians(15)
-    return ok, err, kind
+    return ok, err, kind, wall
 
 
 def stack_trial(height: int, rng: np.random.Generator) -> bool:
@@ -121,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
 
     successes, errors, kinds, failures = 0, [], {"table": 0, "onto-block": 0}, []
-    wall_plain, sim_s, steps = 0.0, 0.0, 0
+    wall_plain, wall_prim, sim_s, steps = 0.0, 0.0, 0.0, 0
     with StepTimer() as timer:
         w = prims = None
         for t in range(args.trials):
@@ -130,8 +140,9 @@ def main(argv: list[str] | None = None) -> int:
                 w.settle()
                 prims = Primitives(w)
             s0, t0, wall0 = w.steps, w.time, time.perf_counter()
-            ok, err, kind = one_trial(w, prims, rng)
+            ok, err, kind, wall = one_trial(w, prims, rng)
             wall_plain += time.perf_counter() - wall0
+            wall_prim += wall
             steps += w.steps - s0
             sim_s += w.time - t0
             successes += ok
@@ -145,23 +156,26 @@ def main(argv: list[str] | None = None) -> int:
 
     rendered: dict[str, float | None] = {}
     render_note = None
-    for label, meshes in (("mesh_arm", True), ("capsule_arm", False)):
+    modes = (("mesh_arm_rgbd", True, {"seg": False, "heightmap": False}),  # RGB + depth of the 3 views
+             ("mesh_arm", True, {}), ("capsule_arm", False, {}))          # + segmentation + heightmap
+    for label, meshes, what in modes:
         try:
             from capmj.sim.cameras import CameraRig
 
             w = random_world(rng)
             w.settle()
             prims, rig = Primitives(w), CameraRig(w, robot_meshes=meshes)
+            rig.render_all(**what)  # warm-up: GL context, mesh upload (one-off costs, see render.py)
             wall = 0.0
             for _ in range(args.rendered):
                 t0 = time.perf_counter()
                 one_trial(w, prims, rng)
-                rig.render_all()
+                rig.render_all(**what)
                 wall += time.perf_counter() - t0
             rig.close()
             rendered[label] = wall / args.rendered if args.rendered else None
         except Exception as exc:  # noqa: BLE001 - report, don't hide the other figures
-            render_note = f"{type(exc).__name__}: {exc}"
+            render_note = f"{label}: {type(exc).__name__}: {exc}"
             rendered[label] = None
 
     stack = {}
@@ -179,6 +193,8 @@ def main(argv: list[str] | None = None) -> int:
         "placement_error_m_median": float(np.median(err)),
         "placement_error_m_p99": float(np.percentile(err, 99)),
         "wall_s_per_primitive": wall_plain / args.trials,
+        "wall_s_per_pick_and_place_call": wall_prim / args.trials,
+        "wall_s_per_primitive_rendered_rgbd": rendered.get("mesh_arm_rgbd"),
         "wall_s_per_primitive_rendered": rendered.get("mesh_arm"),
         "wall_s_per_primitive_rendered_capsule_arm": rendered.get("capsule_arm"),
         "rendered_trials": args.rendered,
@@ -186,7 +202,10 @@ def main(argv: list[str] | None = None) -> int:
         "sim_s_per_primitive": sim_s / args.trials,
         "physics_steps_per_s": steps / wall_plain,
         "mj_step_share_of_wall": step_share,
-        "speedup_vs_pybullet_ravens_3.2s": 3.2 / (wall_plain / args.trials),
+        "speedup_vs_ravens_egl": {k: round(v / (wall_plain / args.trials), 1) for k, v in RAVENS_EGL_S.items()},
+        "speedup_vs_ravens_egl_rendered_rgbd": (
+            {k: round(v / rendered["mesh_arm_rgbd"], 1) for k, v in RAVENS_EGL_RENDERED_S.items()}
+            if rendered.get("mesh_arm_rgbd") else None),
         "stack_success_by_height": stack,
         "stack_trials_per_height": args.stack_trials,
         "failures": failures[:20],

@@ -1,5 +1,8 @@
 """Rendering benchmark: ms per frame for each camera (rgb + depth + seg) and the heightmap.
 
+Also each camera as RGB + depth only (``<name>_rgbd_ms``, one pass) and the three views that way
+(``all_views_rgbd_ms``), where the code supports it.
+
 Prints one JSON line.  Averages over ``--frames`` frames after one warm-up frame per view; the arm
 is moved a little between frames so every frame re-reads the scene.  One-off costs (shared GL
 context + MjrContext at the first render) are reported separately as ``init_s``.
@@ -46,6 +49,12 @@ def main() -> None:
     init_s = time.perf_counter() - t0
     jobs = {name: (lambda n=name: rig.render(n)) for name in rig.camera_names}
     jobs["heightmap"] = rig.heightmap
+    try:  # RGB + depth in one pass (no segmentation); absent before issue #17
+        rig.render("front", seg=False)
+        jobs.update({f"{name}_rgbd": (lambda n=name: rig.render(n, seg=False)) for name in rig.camera_names})
+        jobs["all_views_rgbd"] = lambda: rig.render_all(seg=False, heightmap=False)
+    except TypeError:
+        pass
     q0 = world.arm_q()
     result: dict[str, object] = {}
     for name, job in jobs.items():

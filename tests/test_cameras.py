@@ -241,3 +241,20 @@ def test_renders_even_if_mujoco_was_imported_first_without_mujoco_gl() -> None:
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert abs(float(out.stdout.split()[-1]) - 0.9014) < 0.003
+
+
+@pytest.mark.parametrize("camera", ["front", "left", "right"])
+def test_rgbd_pass_gives_the_same_colour_and_depth_without_segmentation(frames, rig: CameraRig, camera: str) -> None:
+    """``seg=False`` draws one pass and reads colour and depth from it: the same images as the
+    two-pass render (the depth of the shaded pass equals that of the flat segmentation pass)."""
+    full, fast = frames[camera], rig.render(camera, seg=False)
+    assert fast.seg is None
+    np.testing.assert_array_equal(fast.rgb, full.rgb)
+    np.testing.assert_allclose(fast.depth, full.depth, atol=1e-4)
+
+
+def test_render_all_renders_only_what_is_asked(rig: CameraRig) -> None:
+    obs = rig.render_all(seg=False, heightmap=False)
+    assert obs.heightmap is None
+    assert set(obs.views) == set(rig.camera_names)
+    assert all(v.seg is None and v.depth.shape == (rig.height, rig.width) for v in obs.views.values())

@@ -163,3 +163,45 @@ def test_many_turning_placements_never_wind_the_wrist_into_its_limit() -> None:
         res = p.pick_and_place(np.asarray(w.pose(obj).pos), target, w.pose(obj).yaw + np.radians(40))
         assert res.ok, (k, res)
         assert abs(w.arm_q()[5]) < 2 * np.pi - 0.5
+
+
+def test_straight_line_is_tracked_within_the_path_tolerance_with_few_ik_solves() -> None:
+    """The line is solved at a few path points and joint-interpolated in between: every time sample
+    of the plan still puts the tip on the line (within path_tol), for far fewer IK solves than samples."""
+    w = World([small(1, "red", 0.5, 0.2)])
+    motion = Primitives(w).motion
+    calls = {"n": 0}
+    solve = motion.ik.solve
+
+    def counted(*a, **k):  # noqa: ANN002, ANN003
+        calls["n"] += 1
+        return solve(*a, **k)
+
+    motion.ik.solve = counted  # type: ignore[method-assign]
+    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    end = np.array([0.45, -0.35, 0.12])
+    yaw0 = motion.commanded_yaw()
+    plan = motion.plan_line(start, end, yaw0, yaw0 + 0.8, motion.cfg.speed)
+    assert plan is not None
+    assert calls["n"] < len(plan.qs) / 2
+    line = end - start
+    worst = 0.0
+    for q in plan.qs:
+        p = motion.ik.tip_position(q)
+        a = np.clip(np.dot(p - start, line) / np.dot(line, line), 0.0, 1.0)
+        worst = max(worst, float(np.linalg.norm(p - (start + a * line))))
+    assert worst <= motion.cfg.path_tol + 1e-4
+    np.testing.assert_allclose(motion.ik.tip_position(plan.qs[-1]), end, atol=1e-4)
+
+
+def test_segments_end_on_target_without_a_converge_wait() -> None:
+    """With inertia feed-forward the servos arrive with the reference: a move needs no extra steps."""
+    w = World([small(1, "red", 0.5, 0.2)])
+    motion = Primitives(w).motion
+    target = np.array([0.5, -0.2, 0.25])
+    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    plan = motion.plan_line(start, target, motion.commanded_yaw(), 0.3, motion.cfg.speed)
+    assert plan is not None
+    motion.execute(plan)
+    stopped, extra = motion.converge(target)
+    assert not stopped and extra == 0

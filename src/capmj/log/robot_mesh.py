@@ -1,13 +1,12 @@
 """The UR5e's visual meshes for episode logs: one coarse, coloured triangle mesh per link.
 
-The meshes are the Menagerie OBJ files as MuJoCo compiled them (``model.mesh_vert`` /
-``mesh_face``, visual geoms of group 2), moved into their body frame with the geom's pose, so a
+The meshes are the world's visual meshes as MuJoCo compiled them (``model.mesh_vert`` /
+``mesh_face``, visual geoms of group 2; already the light copies of :mod:`capmj.sim.visual_mesh`), moved into their body frame with the geom's pose, so a
 link mesh is drawn correctly by the link's world transform alone.  Each link's mesh is welded and
 simplified in two steps, per visual geom (so colour boundaries stay sharp): vertex clustering on a
 fine grid closes the seams that stop an edge-collapse simplifier, then ``trimesh``'s quadric
-decimation (``fast-simplification``) removes most of what is left.  The originals have ~120 k
-triangles, far too many for a log that should stay small; a few thousand keep the silhouette and
-the blue joint caps.  Vertex normals come from ``trimesh`` (rerun draws a mesh without normals
+decimation (``fast-simplification``) removes most of what is left, coarser than for the cameras:
+a log should stay small, and a few thousand triangles keep the silhouette and the blue joint caps.  Vertex normals come from ``trimesh`` (rerun draws a mesh without normals
 unlit).
 
 The result depends only on the model's meshes, so it is computed once per process and reused by
@@ -20,6 +19,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from capmj.sim.visual_mesh import cluster
 
 VISUAL_GROUP = 2
 """MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
@@ -48,28 +49,6 @@ def _quat_matrix(q_wxyz: np.ndarray) -> np.ndarray:
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
     ])
-
-
-def cluster(vertices: np.ndarray, faces: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex-clustering simplification: merge the vertices of each ``cell``-sized grid cell into
-    their mean and keep the faces whose three corners land in different cells (once each)."""
-    keys = np.floor(vertices / cell).astype(np.int64)
-    _, inverse = np.unique(keys, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
-    n = int(inverse.max()) + 1 if inverse.size else 0
-    sums = np.zeros((n, 3))
-    np.add.at(sums, inverse, vertices)
-    counts = np.bincount(inverse, minlength=n).astype(float)
-    new_v = sums / counts[:, None]
-    f = inverse[faces]
-    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
-    if len(f):
-        _, first = np.unique(np.sort(f, axis=1), axis=0, return_index=True)
-        f = f[np.sort(first)]
-    used = np.unique(f)
-    remap = np.full(n, -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    return new_v[used], remap[f]
 
 
 def _geom_part(model: Any, g: int) -> tuple[np.ndarray, np.ndarray]:
@@ -138,4 +117,4 @@ def cached_link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTE
     return _CACHE[key]
 
 
-__all__ = ["CLUSTER_M", "KEEP_FACES", "LinkMesh", "VISUAL_GROUP", "cached_link_meshes", "cluster", "link_meshes"]
+__all__ = ["CLUSTER_M", "KEEP_FACES", "LinkMesh", "VISUAL_GROUP", "cached_link_meshes", "link_meshes"]

@@ -75,8 +75,8 @@ class CameraFrame:
     """uint8 (H, W, 3)."""
     depth: np.ndarray
     """float32 (H, W) metres along the optical axis."""
-    seg: np.ndarray
-    """int32 (H, W) object id per pixel, 0 = robot/table/background."""
+    seg: np.ndarray | None
+    """int32 (H, W) object id per pixel, 0 = robot/table/background; None when not rendered."""
     intrinsics: np.ndarray
     """float64 (3, 3)."""
     extrinsics: np.ndarray
@@ -134,7 +134,8 @@ class Observation:
     """Everything :meth:`CameraRig.render_all` renders."""
 
     views: Mapping[str, CameraFrame]
-    heightmap: Heightmap
+    heightmap: Heightmap | None
+    """None when :meth:`CameraRig.render_all` was asked not to render it."""
 
 
 def _geom_object_ids(model: mujoco.MjModel) -> np.ndarray:
@@ -268,19 +269,27 @@ class CameraRig:
                     g.pos[2] = -1.0e4  # parked beyond the far plane
         return scene
 
-    def _draw(self, scene: mujoco.MjvScene, mjr: mujoco.MjrContext, w: int, h: int
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Raw (bottom-up) rgb uint8, depth-buffer float32 and object-id int32 images."""
+    def _draw(self, scene: mujoco.MjvScene, mjr: mujoco.MjrContext, w: int, h: int, seg: bool = True
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Raw (bottom-up) rgb uint8, depth-buffer float32 and object-id int32 images.
+
+        Without ``seg`` one shaded pass gives colour and depth together; with it a flat
+        segmentation pass (whose depth buffer is read) comes first.
+        """
         rect = mujoco.MjrRect(0, 0, w, h)
-        ids_rgb = np.empty((h, w, 3), np.uint8)
         zbuf = np.empty((h, w), np.float32)
+        rgb = np.empty((h, w, 3), np.uint8)
+        if not seg:
+            mujoco.mjr_render(rect, scene, mjr)
+            mujoco.mjr_readPixels(rgb, zbuf, rect, mjr)
+            return rgb, zbuf, None
+        ids_rgb = np.empty((h, w, 3), np.uint8)
         scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = 1
         scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = 1
         mujoco.mjr_render(rect, scene, mjr)
         mujoco.mjr_readPixels(ids_rgb, zbuf, rect, mjr)
         scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = 0
         scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = 0
-        rgb = np.empty((h, w, 3), np.uint8)
         mujoco.mjr_render(rect, scene, mjr)
         mujoco.mjr_readPixels(rgb, None, rect, mjr)
         # Segmentation colour = scene-geom segid + 1 (0 = nothing); map it to object ids.
@@ -290,8 +299,7 @@ class CameraRig:
                 lut[g.segid + 1] = self._geom_obj[g.objid]
         code = ids_rgb[..., 0].astype(np.int32) | (ids_rgb[..., 1].astype(np.int32) << 8) \
             | (ids_rgb[..., 2].astype(np.int32) << 16)
-        seg = lut[np.minimum(code, len(lut) - 1)]
-        return rgb, zbuf, seg
+        return rgb, zbuf, lut[np.minimum(code, len(lut) - 1)]
 
     def _metric_depth(self, zbuf: np.ndarray, orthographic: bool) -> np.ndarray:
         """Depth buffer (reversed z, as mujoco.Renderer) to metres; same formulas as mujoco.Renderer."""
@@ -327,18 +335,21 @@ class CameraRig:
         return self._cam_ids[self._checked(camera)]
 
     # ------------------------------------------------------------------ public
-    def render(self, camera: str) -> CameraFrame:
-        """Render one perspective camera: RGB, metric depth, object segmentation, calibration."""
+    def render(self, camera: str, *, seg: bool = True) -> CameraFrame:
+        """Render one perspective camera: RGB, metric depth, object segmentation, calibration.
+
+        ``seg=False`` skips the segmentation (``frame.seg`` is None): one pass instead of two.
+        """
         cid = self._camera_id(camera)
         mjr = self._context()
         scene = self._update(cid)
-        rgb, zbuf, seg = self._draw(scene, mjr, self.width, self.height)
+        rgb, zbuf, ids = self._draw(scene, mjr, self.width, self.height, seg)
         depth = self._metric_depth(zbuf, orthographic=False)
         return CameraFrame(
             name=camera,
             rgb=_frozen(np.ascontiguousarray(rgb[::-1])),
             depth=_frozen(np.ascontiguousarray(depth[::-1])),
-            seg=_frozen(np.ascontiguousarray(seg[::-1])),
+            seg=None if ids is None else _frozen(np.ascontiguousarray(ids[::-1])),
             intrinsics=self._intrinsics[camera],
             extrinsics=_frozen(self.extrinsics(camera)),
         )
@@ -357,6 +368,7 @@ class CameraRig:
         mjr = self._context()
         scene = self._update(self._top_id, hide_robot=not include_robot)
         rgb, zbuf, seg = self._draw(scene, mjr, self.hm_cols, self.hm_rows)
+        assert seg is not None
         depth = self._metric_depth(zbuf, orthographic=True)
         cam_z = float(self.data.cam_xpos[self._top_id][2])
         table_z = float(self.bounds[2, 0])
@@ -366,10 +378,16 @@ class CameraRig:
         return Heightmap(height=_frozen(height), colormap=_frozen(rgb), seg=_frozen(seg),
                          pixel_size=self.pixel_size, bounds=_frozen(self.bounds.copy()))
 
-    def render_all(self, *, include_robot: bool = True) -> Observation:
-        """The three perspective views and the heightmap."""
-        views = MappingProxyType({name: self.render(name) for name in self.camera_names})
-        return Observation(views=views, heightmap=self.heightmap(include_robot=include_robot))
+    def render_all(self, *, include_robot: bool = True, seg: bool = True, heightmap: bool = True) -> Observation:
+        """The three perspective views and the heightmap.
+
+        ``seg=False`` renders the views as RGB + depth in one pass each; ``heightmap=False`` leaves
+        the heightmap out (``observation.heightmap`` is None).  Ask only for what you use: on a
+        software renderer each pass costs about as much as the physics of a pick-and-place.
+        """
+        views = MappingProxyType({name: self.render(name, seg=seg) for name in self.camera_names})
+        return Observation(views=views,
+                           heightmap=self.heightmap(include_robot=include_robot) if heightmap else None)
 
 
 # ---------------------------------------------------------------------- visualisation helpers

@@ -51,50 +51,69 @@ class SuctionIK:
         self._weights = np.array([1.0, 1.0, 1.0, 0.5, 0.5, 0.2])
         self._jacp = np.zeros((3, model.nv))
         self._jacr = np.zeros((3, model.nv))
+        self._jac = np.zeros((6, len(arm_dof)))
+        self._damping = 1e-6 * np.eye(6)
+        self._target = np.eye(4)
+        self._quat = np.zeros(4)
+        self._e = np.zeros(6)
 
     def solve(self, pos: np.ndarray, yaw: float, q_near: np.ndarray, tol: float = 1e-4) -> IKResult:
         """Joints putting the tip at ``pos`` pointing down with ``yaw``, closest to ``q_near``."""
-        target = np.eye(4)
-        rot = tool_rotation(yaw)
-        target[:3, :3] = rot
+        q = self.solve_analytic(pos, yaw, q_near)
+        if q is None:
+            return IKResult(None, np.inf)
+        return self._refine(q, np.asarray(pos, float), self._target[:3, :3].copy(), tol)
+
+    def solve_analytic(self, pos: np.ndarray, yaw: float, q_near: np.ndarray) -> np.ndarray | None:
+        """The analytic solution nearest ``q_near`` within the joint limits, unrefined (~1 mm off)."""
+        target = self._target
+        target[:3, :3] = tool_rotation(yaw)
         target[:3, 3] = pos
         sols = self._solver.inverse_kinematics_with_tcp(target, self._tcp)
         if not sols:
-            return IKResult(None, np.inf)
+            return None
         q = np.asarray(sols, dtype=float)
         # Joints with 2*pi ranges admit q and q +- 2*pi: take the branch nearest q_near.
         q = q_near + np.mod(q - q_near + np.pi, 2 * np.pi) - np.pi
         ok = np.isfinite(q).all(axis=1) & (q >= self.lo).all(axis=1) & (q <= self.hi).all(axis=1)
         if not ok.any():
-            return IKResult(None, np.inf)
+            return None
         cost = np.where(ok, ((q - q_near) ** 2 * self._weights).sum(axis=1), np.inf)
-        best = q[int(np.argmin(cost))]
-        return self._refine(best, np.asarray(pos, float), rot, tol)
+        return q[int(np.argmin(cost))]
 
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:
-        m, d = self.model, self.data
+        """Damped Gauss-Newton steps on the MuJoCo model (removes the analytic model's ~1 mm error)."""
+        m, d, site = self.model, self.data, self.site
+        quat, e = self._quat, self._e
+        jac = self._jac
         err = np.inf
         for _ in range(6):
             d.qpos[self.qadr] = q
             mujoco.mj_kinematics(m, d)
-            mujoco.mj_comPos(m, d)
-            cur = d.site_xpos[self.site]
-            e_pos = pos - cur
-            r_cur = d.site_xmat[self.site].reshape(3, 3)
-            e_rot_mat = rot @ r_cur.T
-            quat = np.zeros(4)
-            mujoco.mju_mat2Quat(quat, e_rot_mat.reshape(-1))
-            e_rot = np.zeros(3)
-            mujoco.mju_quat2Vel(e_rot, quat, 1.0)
-            err = float(np.linalg.norm(e_pos))
-            if err < tol and np.linalg.norm(e_rot) < 1e-3:
+            e[:3] = pos - d.site_xpos[site]
+            mujoco.mju_mat2Quat(quat, (rot @ d.site_xmat[site].reshape(3, 3).T).ravel())
+            mujoco.mju_quat2Vel(e[3:], quat, 1.0)
+            err = float(np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]))
+            if err < tol and e[3] * e[3] + e[4] * e[4] + e[5] * e[5] < 1e-6:
                 break
-            mujoco.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
-            jac = np.vstack([self._jacp[:, self.dadr], self._jacr[:, self.dadr]])
-            e = np.concatenate([e_pos, e_rot])
-            q = q + jac.T @ np.linalg.solve(jac @ jac.T + 1e-6 * np.eye(6), e)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_jacSite(m, d, self._jacp, self._jacr, site)
+            jac[:3] = self._jacp[:, self.dadr]
+            jac[3:] = self._jacr[:, self.dadr]
+            q = q + jac.T @ np.linalg.solve(jac @ jac.T + self._damping, e)
         ok = err < 1e-3 and bool(np.all(q >= self.lo) and np.all(q <= self.hi))
         return IKResult(q if ok else None, err)
+
+    def pose_error(self, q: np.ndarray, pos: np.ndarray, yaw: float) -> tuple[float, float]:
+        """(position error m, orientation error rad) of the tip at joints ``q`` against a
+        downward-pointing target (private data; the world is untouched)."""
+        self.data.qpos[self.qadr] = q
+        mujoco.mj_kinematics(self.model, self.data)
+        e_pos = float(np.linalg.norm(pos - self.data.site_xpos[self.site]))
+        rot = tool_rotation(yaw) @ self.data.site_xmat[self.site].reshape(3, 3).T
+        # angle of the residual rotation: trace = 1 + 2 cos(angle)
+        e_rot = float(np.arccos(np.clip((np.trace(rot) - 1.0) / 2.0, -1.0, 1.0)))
+        return e_pos, e_rot
 
     def tip_position(self, q: np.ndarray) -> np.ndarray:
         """Forward kinematics of the tip for joints ``q`` (private data; the world is untouched)."""

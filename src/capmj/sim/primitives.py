@@ -58,11 +58,11 @@ class Primitives:
         base = m.commanded_yaw()
         q_near = self.world.data.ctrl[:6].copy()
         best, best_cost = base, (np.inf, 0)
-        for k in range(-4, 5):
+        for k in range(-4, 5):  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
             yaw = base + k * _QUARTER
-            res = m.ik.solve(pos, yaw, q_near)
-            if res.q is not None and (abs(res.q[5]), abs(k)) < best_cost:
-                best, best_cost = yaw, (abs(res.q[5]), abs(k))
+            q = m.ik.solve_analytic(pos, yaw, q_near)
+            if q is not None and (abs(q[5]), abs(k)) < best_cost:
+                best, best_cost = yaw, (abs(q[5]), abs(k))
         return best
 
     def _put_back(self, pick: np.ndarray, yaw: float) -> None:

@@ -100,8 +100,18 @@ class Suction:
         return obj
 
     def held_touches_other(self) -> bool:
-        """True when the held object touches anything but the cup (placing is detected this way)."""
+        """True when the held object touches anything but the cup (placing is detected this way).
+
+        Called every physics step while a carried object is lowered, so it avoids building sets.
+        """
+        d = self.data
+        if d.ncon == 0:
+            return False
         held = self.held
         if held is None:
             return False
-        return bool(contact_owners(self.data, self._geom_obj, self._cup, held) - {CUP})
+        geoms = d.contact.geom[: d.ncon]
+        owners = self._geom_obj[geoms]
+        first, second = owners[:, 0] == held, owners[:, 1] == held
+        other = np.concatenate([geoms[first, 1], geoms[second, 0]])
+        return bool((other != self._cup).any())

@@ -94,6 +94,31 @@ class World:
                 if self.steps % every == 0:
                     fn(self)
 
+    def step_controls(self, ctrl: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[int, bool]:
+        """One physics step per row of ``ctrl`` (the arm's six servo references); stops after the
+        step on which ``stop()`` turns true.  Returns (steps taken, stopped).
+
+        The same steps as ``data.ctrl[:6] = row; step()`` per row, in one tight loop: motion
+        tracking spends most of an episode here, and the per-step Python work is what it costs
+        beyond the physics.
+        """
+        m, d, mj_step = self.model, self.data, mujoco.mj_step
+        listeners = self._listeners
+        arm = d.ctrl[:6]
+        steps = 0
+        for row in ctrl:
+            arm[:] = row
+            mj_step(m, d)
+            steps += 1
+            self.steps += 1
+            if listeners:
+                for fn, every in listeners:
+                    if self.steps % every == 0:
+                        fn(self)
+            if stop is not None and stop():
+                return steps, True
+        return steps, False
+
     def add_frame_listener(self, fn: FrameListener, every_steps: int = 25) -> None:
         """Call ``fn(world)`` every ``every_steps`` physics steps (e.g. to log transforms)."""
         self._listeners.append((fn, max(1, int(every_steps))))
