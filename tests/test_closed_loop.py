@@ -126,13 +126,17 @@ def test_identical_replans_are_asked_again_hotter_with_deterministic_seeds(serve
     assert (second["temperatures"], second["seeds"], second["extra_requests"]) == ([0.4, 0.7, 1.0], seeds[1:], 2)
     assert (second["code_differs"], second["identical_to"], second["not_run"]) == (True, None, None)
     assert second["said"] == ["plan B"] and "plan B" in second["code"]  # the different plan ran
-    # each retry shows the failure again and asks for changed lines; retries do not pile up turns
-    for retry in planner[2:]:
-        text = retry["messages"][-1]["content"]
-        assert "identical to the plan of attempt 1" in text and "the blocks are not stacked" in text
-        assert "change at least the lines that caused the failure of attempt 1" in text
-        assert retry["messages"][-2] == {"role": "assistant", "content": code(same)}
-    assert len(planner[2]["messages"]) == len(planner[3]["messages"]) == len(planner[1]["messages"]) + 2
+    # the first retry shows the failure again in the conversation and asks for changed lines
+    text = planner[2]["messages"][-1]["content"]
+    assert "identical to the plan of attempt 1" in text and "the blocks are not stacked" in text
+    assert "change at least the lines that caused the failure of attempt 1" in text
+    assert planner[2]["messages"][-2] == {"role": "assistant", "content": code(same)}
+    assert len(planner[2]["messages"]) == len(planner[1]["messages"]) + 2
+    # the second starts afresh: the planner prompt, the goal and the failure, but no plan to copy
+    fresh = planner[3]["messages"]
+    assert len(fresh) == len(planner[0]["messages"]) and fresh[0] == planner[0]["messages"][0]
+    assert "say('plan A')" not in str(fresh) and "the blocks are not stacked" in fresh[-1]["content"]
+    assert "An earlier plan for this goal (attempt 1) did not achieve it" in fresh[-1]["content"]
     # the same episode asks with the same seeds again (reproducible where the server honours seed)
     _, again = run()
     assert [r.get("seed") for r in again] == seeds and [r["temperature"] for r in again] == [0.0, 0.4, 0.7, 1.0]

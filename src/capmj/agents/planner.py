@@ -30,7 +30,7 @@ from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.errors import PlanError
 
 __all__ = ["DEFAULT_PLAN_BUDGET", "MAX_REPLAN_TEMPERATURE", "REPLAN_TEMPERATURE_STEP", "Feedback", "PlanOutcome",
-           "Sampling", "build_messages", "feedback_text", "identical_text", "plan_and_run", "plan_key",
+           "Sampling", "build_messages", "feedback_text", "fresh_messages", "identical_text", "plan_and_run", "plan_key",
            "replan_sampling"]
 
 DEFAULT_PLAN_BUDGET = SandboxBudget(wall_s=60.0, max_api_calls=2000, max_lines=100_000)
@@ -176,6 +176,20 @@ def identical_text(attempt: int, failed: Feedback | None) -> str:
     return "\n".join(out)
 
 
+def fresh_messages(session: LMPSession, goal: str, attempt: int, failed: Feedback | None) -> list[dict[str, Any]]:
+    """A retry's conversation that does not contain the plan it keeps repeating: the planner prompt
+    with the goal, followed by what went wrong in ``attempt`` (failing line, error, verdict).
+
+    Why: with the failed plan in the conversation (as the re-plan request must show it), a 1.5B
+    model copied it even at temperature 1.0-1.6 (2 of 7 re-plans still identical after three
+    retries); without it the model writes the plan anew, warned about the failure."""
+    hint = [f"# An earlier plan for this goal (attempt {attempt}) did not achieve it."]
+    hint += _failure(failed) if failed is not None else []
+    hint.append("# Write a complete plan that avoids that failure.")
+    q = f"{question(session.objects_text(), goal)}\n" + "\n".join(hint)
+    return session.messages(session.prompt("planner").render(q))
+
+
 def build_messages(session: LMPSession, goal: str, feedback: Feedback | None = None) -> list[dict[str, Any]]:
     """The planner conversation for ``goal`` (with the previous attempt when re-planning)."""
     q = question(session.objects_text(), goal)
@@ -198,7 +212,8 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
 
     ``previous`` are the :func:`plan_key` of the plans of attempts 1, 2, ...; an answer equal to
     one of them is asked again, up to ``retries`` times, showing that attempt's failure again (its
-    :class:`Feedback` among ``earlier``, else ``feedback``).  ``sampling(r)`` gives request r's
+    :class:`Feedback` among ``earlier``, else ``feedback``): the first retry in the conversation,
+    later ones in a fresh conversation without the repeated plan (:func:`fresh_messages`).  ``sampling(r)`` gives request r's
     temperature and seed (r = 0 the first request; without it the client's own are used).  A plan
     still identical after the retries is not run (``outcome.not_run`` says why)."""
     out = outcome if outcome is not None else PlanOutcome()
@@ -226,10 +241,13 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
                               f"identical to the plan of attempt {identical}; asking for a different plan "
                               f"(retry {out.extra_requests} of {retries})")
         failed = next((f for f in earlier if f.attempt == identical), feedback)
-        again = messages + [
-            {"role": "assistant", "content": out.completion},
-            {"role": "user", "content": f"{identical_text(identical, failed)}\n{question(session.objects_text(), goal)}\n"},
-        ]
+        if out.extra_requests == 1:  # first retry: in the conversation, pointing at the copy
+            again = messages + [
+                {"role": "assistant", "content": out.completion},
+                {"role": "user", "content": f"{identical_text(identical, failed)}\n{question(session.objects_text(), goal)}\n"},
+            ]
+        else:  # later retries: a fresh conversation without the plan to copy
+            again = fresh_messages(session, goal, identical, failed)
         call = out.call = session.next_call("planner", goal)
         out.completion = ask(call, again)
         out.key = plan_key(out.completion)
