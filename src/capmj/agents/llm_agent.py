@@ -36,7 +36,7 @@ from typing import Any
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import attempt_facts
-from capmj.agents.base import Checkpoint, EpisodeContext
+from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
@@ -276,7 +276,7 @@ class LLMAgent:
             error = llm_error if llm_error is not None else exc
         if not isinstance(error, LLMError) and outcome.not_run is None:
             try:
-                ctx.world.settle(max_steps=1000)
+                ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
                 if error is None and reporter is not None:
                     report = reporter.judge(session, ctx, goal)
             except Exception as exc:  # noqa: BLE001
