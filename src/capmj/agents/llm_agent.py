@@ -151,7 +151,7 @@ class LLMAgent:
         self.price = parse_price(price)
         tokens, cost = check_limits(model, max_tokens=episode_max_tokens, max_cost_usd=episode_max_cost_usd,
                                     price=self.price)
-        self.limits = {"max_tokens": tokens, "max_cost_usd": cost}
+        self.episode_max_tokens, self.episode_max_cost_usd = tokens, cost  # validated, for each episode's meter
         self.reporter = reporter
         self.attempts = attempts
         self.on_unknown = on_unknown
@@ -174,7 +174,8 @@ class LLMAgent:
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
-        meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
+        meter = self.meter = LLMMeter(self.model, price=self.price, max_tokens=self.episode_max_tokens,
+                                      max_cost_usd=self.episode_max_cost_usd)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
