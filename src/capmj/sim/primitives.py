@@ -17,6 +17,13 @@ from capmj.sim.world import World
 
 _QUARTER = math.pi / 2
 
+AT_HEIGHT_TOL = 1e-3
+"""m: a tip this close below the transit height is already there; it does not rise first."""
+
+YAW_QUARTER_TURNS = range(-4, 5)
+"""Quarter turns tried around the current yaw when choosing a pick yaw: up to a full turn either
+way, so every tool yaw equivalent for the round cup within the wrist's reach is a candidate."""
+
 
 def _wrap(a: float, period: float) -> float:
     """``a`` reduced to [-period/2, period/2)."""
@@ -58,7 +65,7 @@ class Primitives:
         base = m.commanded_yaw()
         q_near = self.world.data.ctrl[:6].copy()
         best, best_cost = base, (np.inf, 0)
-        for k in range(-4, 5):  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
+        for k in YAW_QUARTER_TURNS:  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
             yaw = base + k * _QUARTER
             q = m.ik.solve_analytic(pos, yaw, q_near)
             if q is not None and (abs(q[5]), abs(k)) < best_cost:
@@ -79,7 +86,7 @@ class Primitives:
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         tip = w.tip_pose()[0]
-        m.move_to(np.array([tip[0], tip[1], tip[2] + 0.1]), yaw)
+        m.move_to(np.array([tip[0], tip[1], tip[2] + cfg.retreat]), yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
 
     # ------------------------------------------------------------------ primitive
@@ -107,7 +114,7 @@ class Primitives:
         transit = max(cfg.min_transit_z, self.highest_top() + cfg.clearance)
         # 1. up, over, and down onto the pick point
         tip = w.tip_pose()[0]
-        if tip[2] < transit - 1e-3:
+        if tip[2] < transit - AT_HEIGHT_TOL:
             if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
                 return result("unreachable", None, "cannot rise to transit height")
         m.unwind_wrist()
@@ -158,6 +165,6 @@ class Primitives:
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         tip = w.tip_pose()[0]
-        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + 0.1)]), new_yaw)
+        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + cfg.retreat)]), new_yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
         return result("ok", obj)
