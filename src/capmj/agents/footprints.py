@@ -150,9 +150,13 @@ class Footprints:
         return unary_union(shapes)
 
     # ================================================================== what rests where
-    def surface_z(self, xy: Vector, exclude: set[int]) -> float:
+    def support_z(self, xy: Vector, exclude: set[int]) -> float:
         """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
-        covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
+        covers the point, or the floor of a bowl (or what lies in it) when inside its wall.
+
+        Answers on exact footprints at the point itself, and zones (flat marks) do not count.  The
+        arm's own descent uses the coarser :meth:`capmj.sim.primitives.Primitives.highest_top_under`
+        (where it may first touch something, e.g. a bowl's rim, not its floor)."""
         z = 0.0
         for o in self._objects():
             if o.obj_id in exclude or o.kind == "zone":  # zones are flat marks, not surfaces

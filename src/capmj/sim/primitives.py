@@ -39,8 +39,16 @@ class Primitives:
         self.cfg = self.motion.cfg
 
     # ------------------------------------------------------------------ geometry
-    def surface_z(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
-        """Height of the highest object top under a disc at ``xy`` (0 for the bare table)."""
+    def highest_top_under(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
+        """Highest world-box top (m) of any object under a disc of ``radius`` at ``xy`` (0 for the
+        bare table): where a guarded descent there can first meet something.
+
+        A deliberately coarse, conservative bound for motion: axis-aligned boxes grown by the
+        cup's radius, zones counted, a bowl's rim rather than its floor.  The descent starts
+        ``approach_gap`` above it and stops at contact anyway.  It is not the height an object
+        comes to rest on (a bowl's floor, never a zone): that is the planner API's
+        :meth:`capmj.agents.footprints.Footprints.support_z`, on exact footprints.
+        """
         z = 0.0
         for i in self.world.by_id:
             if i == exclude:
@@ -51,6 +59,7 @@ class Primitives:
         return z
 
     def highest_top(self, exclude: int | None = None) -> float:
+        """Highest object top (m) on the whole table (0 for the bare table): transit clears it."""
         tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
         return max(tops, default=0.0)
 
@@ -121,7 +130,7 @@ class Primitives:
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
-        surface = self.surface_z(pick[:2])
+        surface = self.highest_top_under(pick[:2])
         touching = lambda: w.suction.touching() is not None  # noqa: E731
         status, _ = m.move_to(np.array([pick[0], pick[1], surface + cfg.approach_gap]), yaw, stop=touching)
         if status == "ok":
@@ -150,7 +159,7 @@ class Primitives:
         if len(place) > 2:
             centre_z = float(place[2])
         else:
-            centre_z = self.surface_z(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
+            centre_z = self.highest_top_under(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
