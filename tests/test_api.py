@@ -47,7 +47,7 @@ def api_ctx():
 
 
 def name_of(ctx, obj_id: int) -> str:
-    return ctx.world.by_id[obj_id].name
+    return ctx.world.objects_by_id[obj_id].name
 
 
 # ------------------------------------------------------------------------------------ names

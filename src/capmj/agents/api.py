@@ -319,7 +319,7 @@ class PlannerAPI:
         if not res.ok:
             raise RuntimeError(f"put_first_on_second({what!r}) failed: {res.status}: {res.message}")
         if held is not None and res.obj_id != held.obj_id:
-            got = w.by_id[res.obj_id].name if res.obj_id in w.by_id else res.obj_id
+            got = w.objects_by_id[res.obj_id].name if res.obj_id in w.objects_by_id else res.obj_id
             raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
 
 

@@ -50,7 +50,7 @@ class Primitives:
         :meth:`capmj.agents.footprints.Footprints.support_z`, on exact footprints.
         """
         z = 0.0
-        for i in self.world.by_id:
+        for i in self.world.objects_by_id:
             if i == exclude:
                 continue
             lo, hi = self.world.aabb(i)
@@ -60,7 +60,7 @@ class Primitives:
 
     def highest_top(self, exclude: int | None = None) -> float:
         """Highest object top (m) on the whole table (0 for the bare table): transit clears it."""
-        tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
+        tops = [self.world.top_z(i) for i in self.world.objects_by_id if i != exclude]
         return max(tops, default=0.0)
 
     def _unwound_yaw(self, pos: np.ndarray) -> float:
@@ -145,7 +145,7 @@ class Primitives:
         # 2. lift high enough that the carried object clears everything, then carry
         obj_pose = w.pose(obj)
         tip = w.tip_pose()[0]
-        hang = tip[2] - (obj_pose.pos[2] - w.by_id[obj].half_extents[2])
+        hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
         transit = max(cfg.min_transit_z, self.highest_top(exclude=obj) + cfg.clearance + hang)
         if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
@@ -159,7 +159,7 @@ class Primitives:
         if len(place) > 2:
             centre_z = float(place[2])
         else:
-            centre_z = self.highest_top_under(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
+            centre_z = self.highest_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
