@@ -299,7 +299,7 @@ class LLMAgent:
         record["not_run"] = outcome.not_run
         if outcome.not_run is not None:
             record["report"] = f"plan not run: {outcome.not_run}"
-        record["primitives"] = ctx.primitives
+        record["primitives"] = ctx.attempt_primitives
         new = client.records[before:]
         record["llm_calls"] = len(new)
         record["prompt_tokens"] = sum(r.prompt_tokens for r in new)
