@@ -80,8 +80,8 @@ def one_trial(w: World, prims: Primitives, rng: np.random.Generator) -> tuple[bo
             if i != j and P.resting_on(state, j, i):
                 tops.pop(i, None)
     obj = int(rng.choice(sorted(tops)))
-    spec = w.by_id[obj]
-    onto = [j for j in tops if j != obj and w.by_id[j].size == "big" and state.pos(j)[2] < 0.1]
+    spec = w.objects_by_id[obj]
+    onto = [j for j in tops if j != obj and w.objects_by_id[j].size == "big" and state.pos(j)[2] < 0.1]
     if onto and rng.random() < 0.3:
         base = int(rng.choice(onto))
         target = state.pos(base).copy()

@@ -40,7 +40,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from capmj.agents.oracle import OracleAgent
-    from capmj.log import record_episode
+    from capmj.runner import record_episode
     from capmj.tasks.registry import get_task, resolve
 
     out = args.out or Path(tempfile.mkdtemp(prefix="capmj-rrd-size-"))

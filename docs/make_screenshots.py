@@ -40,7 +40,7 @@ def record_example(path: Path) -> Path:
     from llm_stub_server import StubLLMServer
 
     from capmj.agents.llm_agent import LLMAgent
-    from capmj.log import record_episode
+    from capmj.runner import record_episode
     from capmj.tasks.registry import get_task
 
     with StubLLMServer() as server:

@@ -47,7 +47,7 @@ def api_ctx():
 
 
 def name_of(ctx, obj_id: int) -> str:
-    return ctx.world.by_id[obj_id].name
+    return ctx.world.objects_by_id[obj_id].name
 
 
 # ------------------------------------------------------------------------------------ names
@@ -216,7 +216,7 @@ def test_put_on_block_zone_bowl_and_position(api_ctx):
     f["stack_objects_in_order"]([red, purple], [0.45, -0.1])
     state = ctx.world.state()
     assert P.is_stack(state, [3, 5])[0] and np.allclose(state.pos(3)[:2], [0.45, -0.1], atol=0.01)
-    assert ctx.primitives == 6
+    assert ctx.attempt_primitives == 6
 
 
 def test_fixed_objects_and_bad_targets_error_clearly(api_ctx):
@@ -229,7 +229,7 @@ def test_fixed_objects_and_bad_targets_error_clearly(api_ctx):
         f["put_first_on_second"](name_of(ctx, 3), name_of(ctx, 3))
     with pytest.raises(ValueError, match="target must be"):
         f["put_first_on_second"](name_of(ctx, 3), [1, 2, 3, 4, 5])
-    assert ctx.primitives == 0
+    assert ctx.attempt_primitives == 0
 
 
 def test_say_and_call_log(api_ctx):

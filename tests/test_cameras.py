@@ -125,7 +125,7 @@ def test_segmentation_and_backprojection(frames, world: World, camera: str) -> N
         assert seen.get(obj, 0) > 30, (camera, seen)
     assert set(seen) <= {0, RED, BLUE, ZONE}
     for obj in (RED, BLUE):
-        spec = world.by_id[obj]
+        spec = world.objects_by_id[obj]
         centre = np.array(world.pose(obj).pos)
         rows, cols = np.nonzero(f.seg == obj)
         # The seg centroid pixel, back-projected with its depth, lands on the block (~1 cm).

@@ -15,12 +15,12 @@ import pytest
 from capmj.sim.palette import COLOR_NAMES
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
+from capmj.tasks.builtin import GENERATED_TASKS
 from capmj.tasks.protocol import make_scene
 from capmj.tasks.registry import get_task, resolve, validate_task
 from capmj_tasks.common import solved_state
 
-NAMES = ["build-rectangular-pyramid", "build-cube", "construct-circle-with-blocks", "construct-circle-ball-middle",
-         "build-concentric-circles"]
+NAMES = list(GENERATED_TASKS[:5])
 N_SEEDS = 1000
 SOLVE_SEEDS = range(10001, 10041, 2)
 

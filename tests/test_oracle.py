@@ -81,6 +81,6 @@ def test_reset_restores_the_initial_state_and_motion_stays_fast() -> None:
     assert first.ok
     ctx.reset()
     assert np.allclose(world.pose(block).pos, start, atol=1e-9)
-    assert ctx.primitives == 0 and ctx.attempt == 1
+    assert ctx.attempt_primitives == 0 and ctx.attempt == 1
     again = ctx.pick_and_place(start, np.array([0.45, 0.3]), 2.5)
     assert again.ok and again.steps == first.steps  # same motion from the same state

@@ -82,7 +82,7 @@ def test_planner_example_succeeds(lmp: str, example) -> None:
     code = session.prepare(example.body, env)
     assert code == example.body, "planner examples must not need function synthesis"
     run_code(code, env, filename=f"<planner/{example.id}>")
-    assert ctx.primitives >= 1
+    assert ctx.attempt_primitives >= 1
     if "task" in example.meta:
         verdict = ctx.verdict()
         assert verdict.success, (example.id, verdict.diagnostics)
@@ -109,7 +109,7 @@ def test_helper_example_returns_expected_value(lmp: str, example) -> None:
         expected = example.json("expect")
         assert _close(value, expected), (example.id, value, expected)
     _check(session.helper_env(), example, {"ret_val": value})
-    assert ctx.primitives == 0, "helper LMPs must not move anything"
+    assert ctx.attempt_primitives == 0, "helper LMPs must not move anything"
 
 
 @pytest.mark.parametrize(("lmp", "example"), examples("parse_function"), ids=lambda v: getattr(v, "id", v))

@@ -7,14 +7,10 @@ import pytest
 from capmj.agents.reference import ReferenceAgent, reference_plan
 from capmj.errors import AgentError
 from capmj.runner import run_episode
+from capmj.tasks.builtin import BENCHMARK_TASKS
 from capmj.tasks.registry import get_task, resolve
 
-BENCHMARK = [
-    "stack-all-blocks-on-a-zone", "stack-blocks-of-same-size", "stack-blocks-of-same-color",
-    "stack-blocks-by-color-and-size", "stack-blocks-by-relative-position-and-color",
-    "move-blocks-between-absolute-positions", "move-blocks-between-absolute-positions-by-size",
-    "put-block-into-matching-bowl", "put-block-into-mismatching-bowl", "stack-blocks-with-alternate-color",
-]
+BENCHMARK = list(BENCHMARK_TASKS)
 ALL = resolve("all")
 """Every registered task: each must have a reference plan."""
 

@@ -5,12 +5,9 @@ from __future__ import annotations
 
 from capmj.bench.report import GENERATED_NUMBERS, markdown
 from capmj.bench.results import summarize
+from capmj.tasks.builtin import GENERATED_TASKS
 
-SPEC_ORDER = [
-    "build-rectangular-pyramid", "build-cube", "construct-circle-with-blocks", "construct-circle-ball-middle",
-    "build-concentric-circles", "divide-blocks", "max-odd-number-blocks-in-same-color-zone",
-    "stack-most-color-block", "zone-bisector", "insert-blocks-in-fixture",
-]
+SPEC_ORDER = list(GENERATED_TASKS)
 
 
 def records(task: str, wins: int, n: int = 4, agent: str = "oracle") -> list[dict]:

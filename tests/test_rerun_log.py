@@ -19,9 +19,9 @@ import pytest
 pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
 
-from capmj.log import record_episode  # noqa: E402
 from capmj.log.geometry import GRIP_COLOR  # noqa: E402
 from capmj.log.verdict3d import FAIL_COLOR, OK_COLOR  # noqa: E402
+from capmj.runner import record_episode  # noqa: E402
 from capmj.sim.robot import ARM_BODIES  # noqa: E402
 from capmj.tasks.protocol import make_scene  # noqa: E402
 from capmj.tasks.registry import get_task  # noqa: E402

@@ -21,6 +21,7 @@ from capmj.sim.objects import BOWL_HEIGHT, ZONE_SIZE
 from capmj.sim.palette import COLOR_NAMES, COOL, WARM
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
+from capmj.tasks.builtin import BENCHMARK_TASKS
 from capmj.tasks.protocol import Scene, Task, make_scene
 from capmj.tasks.registry import get_task, resolve
 from capmj_tasks import (
@@ -40,12 +41,7 @@ from capmj_tasks.common import solved_state
 ALL = resolve("all")
 """Every registered task: the generic tests run over all of them."""
 TASKS = {name: get_task(name) for name in ALL}
-SPEC_NAMES = [
-    "stack-all-blocks-on-a-zone", "stack-blocks-of-same-size", "stack-blocks-of-same-color",
-    "stack-blocks-by-color-and-size", "stack-blocks-by-relative-position-and-color",
-    "move-blocks-between-absolute-positions", "move-blocks-between-absolute-positions-by-size",
-    "put-block-into-matching-bowl", "put-block-into-mismatching-bowl", "stack-blocks-with-alternate-color",
-]
+SPEC_NAMES = list(BENCHMARK_TASKS)
 STACK_TASKS = [A.TASK.name, B.TASK.name, C.TASK.name, D.TASK.name, E.TASK.name, J.TASK.name]
 N_SEEDS = 1000
 FIXED_GOAL_TEXT = {

@@ -1,4 +1,5 @@
-"""Run one episode: (task, seed, agent) -> :class:`EpisodeResult`.
+"""Run one episode: (task, seed, agent) -> :class:`EpisodeResult`; :func:`record_episode` also logs
+it to an ``.rrd`` with :class:`capmj.log.recorder.RerunRecorder`.
 
 The runner never raises for an episode's own failure: a task whose scene cannot be generated, a
 world that does not compile, an agent that raises or runs out of budget — each becomes a recorded,
@@ -8,7 +9,8 @@ explained failed result, so a benchmark grid always completes.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from capmj.agents.attribution import final_poses, placement_drift
@@ -117,3 +119,35 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
                          ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm,
                          final_poses=poses, drift=drift, calls=list(ctx.notes.get("llm_calls", [])))
+
+
+def _oracle_goals(task: Any, seed: int) -> tuple:
+    """The task's oracle goals for this seed (where objects should end), or () if they fail."""
+    try:
+        return tuple(task.oracle_goals(make_scene(task, seed)))
+    except Exception:  # noqa: BLE001 - the episode itself reports a broken task
+        return ()
+
+
+def record_episode(task: Any, seed: int, agent: Any, path: str | Path | None, *, images: bool = False,
+                   budget: Budget | None = None) -> EpisodeResult:
+    """Run one episode; when ``path`` is given, log it to that ``.rrd`` (summary included) and return
+    the result with ``rrd`` set to the path.  With ``path=None`` nothing is logged.
+
+    The bench workers run every episode through this.  It lives here, not in :mod:`capmj.log`, because
+    it runs the episode; the log package only records what it is sent.
+    """
+    if path is None:
+        return run_episode(task, seed, agent, budget=budget)
+    from capmj.log.recorder import RerunRecorder  # rerun is imported only when an episode is logged
+
+    name = getattr(task, "name", str(task))
+    rec = RerunRecorder(path, task=name, seed=seed, agent=getattr(agent, "name", None),
+                        model=getattr(agent, "model", None), images=images, goals=_oracle_goals(task, seed))
+    try:
+        result = run_episode(task, seed, agent, budget=budget, recorder=rec)
+        result = replace(result, rrd=str(path))
+        rec.finish(result)
+    finally:
+        rec.close()
+    return result

@@ -294,9 +294,9 @@ class PlannerAPI:
             c = self._pos(t.obj_id)
             xy = c[:2]
             if t.kind == "bowl":
-                surface = self._footprints.surface_z(xy, exclude)
+                surface = self._footprints.support_z(xy, exclude)
             else:
-                surface = max(self._footprints.surface_z(xy, exclude), 0.0 if t.kind == "zone" else w.top_z(t.obj_id))
+                surface = max(self._footprints.support_z(xy, exclude), 0.0 if t.kind == "zone" else w.top_z(t.obj_id))
                 if t.kind in ("block", "zone"):
                     yaw = w.pose(t.obj_id).yaw  # line the object up with what it goes on
             place = np.array([xy[0], xy[1], surface + half])
@@ -310,7 +310,7 @@ class PlannerAPI:
                 raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
                                  f"xyzw), got {_summary(target, 80)}")
             p = np.asarray(target, float)
-            rest = self._footprints.surface_z(p[:2], exclude) + half
+            rest = self._footprints.support_z(p[:2], exclude) + half
             place = np.array([p[0], p[1], max(rest, float(p[2])) if len(p) == 3 else rest])
         if not np.all(np.isfinite(place)):
             raise ValueError(f"target position {place.tolist()} is not finite")
@@ -319,7 +319,7 @@ class PlannerAPI:
         if not res.ok:
             raise RuntimeError(f"put_first_on_second({what!r}) failed: {res.status}: {res.message}")
         if held is not None and res.obj_id != held.obj_id:
-            got = w.by_id[res.obj_id].name if res.obj_id in w.by_id else res.obj_id
+            got = w.objects_by_id[res.obj_id].name if res.obj_id in w.objects_by_id else res.obj_id
             raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 __all__ = ["PLANNER_PROGRAM", "attempt_facts", "final_poses", "placement_drift"]
@@ -53,7 +53,7 @@ def failed_program(calls: Iterable[Any], attempt: int, error: str | None) -> str
 
 
 def attempt_facts(calls: Iterable[Any], attempt: int, error: str | None,
-                  api_log: list[Mapping[str, Any]]) -> dict[str, Any]:
+                  api_log: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     """Per-attempt facts: ``failed_program`` and ``api_error`` (the error an API call raised)."""
     facts: dict[str, Any] = {}
     if error:

@@ -53,10 +53,10 @@ class EpisodeContext:
         self.seed = seed
         self.scene = scene
         self.world = world
-        self.prims = Primitives(world)
+        self.arm = Primitives(world)  # the pick-and-place primitive over this world
         self.budget = budget or Budget()
         self.recorder: Recorder = recorder or NullRecorder()
-        self.primitives = 0           # in the current attempt
+        self.attempt_primitives = 0   # pick-and-places in the current attempt
         self.total_primitives = 0     # over all attempts
         self.attempt = 0
         self._initial = world.snapshot()
@@ -67,12 +67,12 @@ class EpisodeContext:
     # ------------------------------------------------------------------ acting
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
         """One budgeted, recorded pick-and-place.  Raises ``BudgetExceeded`` when out of budget."""
-        if self.primitives >= self.budget.max_primitives:
+        if self.attempt_primitives >= self.budget.max_primitives:
             raise BudgetExceeded(f"primitive budget of {self.budget.max_primitives} pick-and-places used up")
         if self.world.steps - self._attempt_steps0 >= self.budget.max_sim_steps:
             raise BudgetExceeded(f"simulation budget of {self.budget.max_sim_steps} steps used up")
-        res = self.prims.pick_and_place(np.asarray(pick, float), np.asarray(place, float), place_yaw)
-        self.primitives += 1
+        res = self.arm.pick_and_place(np.asarray(pick, float), np.asarray(place, float), place_yaw)
+        self.attempt_primitives += 1
         self.total_primitives += 1
         if res.ok and res.obj_id is not None:
             self.placements[res.obj_id] = (res.place, res.final_pos)
@@ -84,9 +84,9 @@ class EpisodeContext:
     def reset(self) -> None:
         """Restore the episode's initial state (before a re-plan)."""
         self.world.restore(self._initial)
-        self.prims = Primitives(self.world, self.prims.cfg)  # motion state must match the restored arm
+        self.arm = Primitives(self.world, self.arm.cfg)  # motion state must match the restored arm
         self.attempt += 1
-        self.primitives = 0
+        self.attempt_primitives = 0
         self.placements = {}
         self._attempt_steps0 = self.world.steps
 
@@ -98,7 +98,7 @@ class EpisodeContext:
         """Return to the end of an earlier attempt, within the current one (no primitive is counted):
         an attempt whose plan is identical to that attempt's is not run again but ends where it did."""
         self.world.restore(checkpoint.world)
-        self.prims = Primitives(self.world, self.prims.cfg)
+        self.arm = Primitives(self.world, self.arm.cfg)
         self.placements = dict(checkpoint.placements)
         self._attempt_steps0 = self.world.steps
 

@@ -14,6 +14,7 @@ nothing of names, episodes or call logging: that is the facade in :mod:`capmj.ag
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Iterable, Sequence
 
 import mujoco
@@ -38,8 +39,29 @@ diagonal 0.042 m) fits there at any yaw."""
 TILTED = math.radians(20.0)
 """Tilt beyond which an object's footprint is its world xy box (its geoms no longer lie flat)."""
 
-Part = tuple
-"""One footprint part: ``("disc", cx, cy, r)`` or ``("rect", cx, cy, yaw, hx, hy)`` (m, rad)."""
+
+@dataclass(frozen=True, slots=True)
+class Disc:
+    """A round footprint part: centre (m) and radius (m)."""
+
+    cx: float
+    cy: float
+    r: float
+
+
+@dataclass(frozen=True, slots=True)
+class Rect:
+    """A rectangular footprint part: centre (m), yaw (rad) and half sizes along its own axes (m)."""
+
+    cx: float
+    cy: float
+    yaw: float
+    hx: float
+    hy: float
+
+
+Part = Disc | Rect
+"""One footprint part."""
 
 
 def distances(px: np.ndarray, py: np.ndarray, parts: np.ndarray) -> np.ndarray:
@@ -95,9 +117,9 @@ class Footprints:
                 centre = d.geom_xpos[g] + mat @ m.geom_aabb[g, :3]
                 half = m.geom_aabb[g, 3:]
                 if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE):
-                    out.append(("disc", centre[0], centre[1], float(half[0])))
+                    out.append(Disc(centre[0], centre[1], float(half[0])))
                     continue
-                out.append(("rect", centre[0], centre[1], mat_yaw(mat), float(half[0]), float(half[1])))
+                out.append(Rect(centre[0], centre[1], mat_yaw(mat), float(half[0]), float(half[1])))
             return out
 
         return cls(lambda: tuple(world.objects), world.pose, world.aabb, world.top_z, geom_parts)
@@ -107,14 +129,14 @@ class Footprints:
 
     # ================================================================== footprints
     def parts(self, o: ObjectSpec) -> list[Part]:
-        """Footprint parts of an object now: ("disc", cx, cy, r) or ("rect", cx, cy, yaw, hx, hy)."""
+        """Footprint parts of an object now: discs (bowls, balls, round geoms) and rectangles."""
         pose = self._pose(o.obj_id)
         if o.kind in ("bowl", "ball"):
             r = BOWL_RADIUS if o.kind == "bowl" else BALL_RADIUS
-            return [("disc", pose.pos[0], pose.pos[1], r)]
+            return [Disc(pose.pos[0], pose.pos[1], r)]
         if pose.tilt > TILTED:
             lo, hi = self._aabb(o.obj_id)
-            return [("rect", (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0, (hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2)]
+            return [Rect((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0, (hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2)]
         return self._geom_parts(o.obj_id)
 
     def part_arrays(self, objs: Sequence[ObjectSpec]) -> tuple[np.ndarray, np.ndarray]:
@@ -123,10 +145,10 @@ class Footprints:
         rows, owner = [], []
         for k, o in enumerate(objs):
             for p in self.parts(o):
-                if p[0] == "disc":
-                    rows.append((p[1], p[2], 1.0, 0.0, p[3], p[3], 1.0))
+                if isinstance(p, Disc):
+                    rows.append((p.cx, p.cy, 1.0, 0.0, p.r, p.r, 1.0))
                 else:
-                    rows.append((p[1], p[2], math.cos(p[3]), math.sin(p[3]), p[4], p[5], 0.0))
+                    rows.append((p.cx, p.cy, math.cos(p.yaw), math.sin(p.yaw), p.hx, p.hy, 0.0))
                 owner.append(k)
         return np.asarray(rows, float).reshape(-1, 7), np.asarray(owner, int)
 
@@ -142,17 +164,21 @@ class Footprints:
 
         shapes = []
         for p in self.parts(o):
-            if p[0] == "disc":
-                shapes.append(Point(p[1], p[2]).buffer(p[3], 32))
+            if isinstance(p, Disc):
+                shapes.append(Point(p.cx, p.cy).buffer(p.r, 32))
                 continue
-            _, cx, cy, yaw, hx, hy = p
-            shapes.append(Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], yaw, (cx, cy))))
+            hx, hy = p.hx, p.hy
+            shapes.append(Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], p.yaw, (p.cx, p.cy))))
         return unary_union(shapes)
 
     # ================================================================== what rests where
-    def surface_z(self, xy: Vector, exclude: set[int]) -> float:
+    def support_z(self, xy: Vector, exclude: set[int]) -> float:
         """Height (m) an object put down at ``xy`` rests on: the table (0), the top of whatever
-        covers the point, or the floor of a bowl (or what lies in it) when inside its wall."""
+        covers the point, or the floor of a bowl (or what lies in it) when inside its wall.
+
+        Answers on exact footprints at the point itself, and zones (flat marks) do not count.  The
+        arm's own descent uses the coarser :meth:`capmj.sim.primitives.Primitives.highest_top_under`
+        (where it may first touch something, e.g. a bowl's rim, not its floor)."""
         z = 0.0
         for o in self._objects():
             if o.obj_id in exclude or o.kind == "zone":  # zones are flat marks, not surfaces
@@ -246,4 +272,4 @@ class Footprints:
         return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
 
 
-__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "REACH_RADIUS", "TILTED", "distances"]
+__all__ = ["Disc", "FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "Rect", "REACH_RADIUS", "TILTED", "distances"]

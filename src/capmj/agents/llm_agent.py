@@ -36,7 +36,7 @@ from typing import Any
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import attempt_facts
-from capmj.agents.base import Checkpoint, EpisodeContext
+from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
@@ -151,7 +151,7 @@ class LLMAgent:
         self.price = parse_price(price)
         tokens, cost = check_limits(model, max_tokens=episode_max_tokens, max_cost_usd=episode_max_cost_usd,
                                     price=self.price)
-        self.limits = {"max_tokens": tokens, "max_cost_usd": cost}
+        self.episode_max_tokens, self.episode_max_cost_usd = tokens, cost  # validated, for each episode's meter
         self.reporter = reporter
         self.attempts = attempts
         self.on_unknown = on_unknown
@@ -174,7 +174,8 @@ class LLMAgent:
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
-        meter = self.meter = LLMMeter(self.model, price=self.price, **self.limits)
+        meter = self.meter = LLMMeter(self.model, price=self.price, max_tokens=self.episode_max_tokens,
+                                      max_cost_usd=self.episode_max_cost_usd)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
@@ -276,7 +277,7 @@ class LLMAgent:
             error = llm_error if llm_error is not None else exc
         if not isinstance(error, LLMError) and outcome.not_run is None:
             try:
-                ctx.world.settle(max_steps=1000)
+                ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
                 if error is None and reporter is not None:
                     report = reporter.judge(session, ctx, goal)
             except Exception as exc:  # noqa: BLE001
@@ -298,7 +299,7 @@ class LLMAgent:
         record["not_run"] = outcome.not_run
         if outcome.not_run is not None:
             record["report"] = f"plan not run: {outcome.not_run}"
-        record["primitives"] = ctx.primitives
+        record["primitives"] = ctx.attempt_primitives
         new = client.records[before:]
         record["llm_calls"] = len(new)
         record["prompt_tokens"] = sum(r.prompt_tokens for r in new)

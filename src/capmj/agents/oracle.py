@@ -106,7 +106,7 @@ class OracleAgent:
         for _, oid in sorted(blockers):
             state = w.state()
             current = [o.moved(state.poses[o.obj_id].pos) for o in w.objects if o.obj_id != oid]
-            spot = free_positions(current, WORKSPACE.xy, [w.by_id[oid].footprint_radius],
+            spot = free_positions(current, WORKSPACE.xy, [w.objects_by_id[oid].footprint_radius],
                                   reserved=[((tx, ty), CLEAR_RESERVE)])[0]
             res = ctx.pick_and_place(np.asarray(w.pose(oid).pos), np.array(spot))
             if not res.ok:

@@ -146,7 +146,7 @@ def _run_with(agent: Any, job: Job, spec: AgentSpec) -> dict[str, Any]:
         task = get_task(job.task)
     except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
         return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
-    from capmj.log import record_episode
+    from capmj.runner import record_episode
 
     try:
         result = record_episode(task, job.seed, agent, job.rrd, images=spec.images)

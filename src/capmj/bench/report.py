@@ -32,34 +32,7 @@ from capmj.bench.results import (
 )
 from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
 from capmj.errors import ConfigError
-
-TASK_LETTERS: dict[str, str] = {
-    "stack-all-blocks-on-a-zone": "A",
-    "stack-blocks-of-same-size": "B",
-    "stack-blocks-of-same-color": "C",
-    "stack-blocks-by-color-and-size": "D",
-    "stack-blocks-by-relative-position-and-color": "E",
-    "move-blocks-between-absolute-positions": "F",
-    "move-blocks-between-absolute-positions-by-size": "G",
-    "put-block-into-matching-bowl": "H",
-    "put-block-into-mismatching-bowl": "I",
-    "stack-blocks-with-alternate-color": "J",
-}
-"""The thesis's letters of the benchmark tasks (Table 5.1), shown in front of the names."""
-
-GENERATED_NUMBERS: dict[str, int] = {
-    "build-rectangular-pyramid": 1,
-    "build-cube": 2,
-    "construct-circle-with-blocks": 3,
-    "construct-circle-ball-middle": 4,
-    "build-concentric-circles": 5,
-    "divide-blocks": 6,
-    "max-odd-number-blocks-in-same-color-zone": 7,
-    "stack-most-color-block": 8,
-    "zone-bisector": 9,
-    "insert-blocks-in-fixture": 10,
-}
-"""The thesis's numbers of the generated tasks (Tables 5.3 and 5.4): their rows' order and labels."""
+from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""

@@ -8,7 +8,7 @@ key: rotating a key must not invalidate the cache, and secrets must not be deriv
 names.
 
 Layout: ``<root>/<key[:2]>/<key[2:4]>/<key>.json`` (two-level fan-out keeps directories small).
-Files are written atomically (temporary file + ``os.replace``) so a crash or a parallel run never
+Files are written atomically (:func:`capmj.atomic.atomic_write`) so a crash or a parallel run never
 leaves a half-written entry; an unreadable or malformed entry is simply a miss and is overwritten.
 """
 
@@ -18,12 +18,11 @@ import hashlib
 import json
 import logging
 import math
-import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from capmj.atomic import atomic_write
 from capmj.errors import ConfigError
 
 __all__ = ["CACHE_FORMAT", "CompletionCache", "cache_key"]
@@ -118,17 +117,6 @@ class CompletionCache:
         path = self.path_for(key)
         data = {**record, "key": key, "format": CACHE_FORMAT}
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{key[:8]}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as handle:
-                json.dump(data, handle, ensure_ascii=False, indent=1, allow_nan=False)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        with atomic_write(path, "w", encoding="utf-8") as handle:
+            json.dump(data, handle, ensure_ascii=False, indent=1, allow_nan=False)
         return path

@@ -288,12 +288,12 @@ class LLMClient:
             raise ConfigError(f"temperature must be a finite number >= 0, got {temperature}")
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
             raise ConfigError(f"seed must be an integer or None, got {seed!r}")
-        messages = [dict(m) for m in messages]
+        request: list[dict[str, Any]] = [dict(m) for m in messages]  # copies: the caller's may change
         mock = mock_response if mock_response is not None else cfg.mock_response
         start = time.monotonic()
         key = None
         if self._cache is not None and mock is None:
-            key = cache_key(model=cfg.model, api_base=cfg.api_base, messages=messages,
+            key = cache_key(model=cfg.model, api_base=cfg.api_base, messages=request,
                             temperature=temperature, max_tokens=cfg.max_tokens, seed=seed)
             stored = self._cache.get(key)
             if stored is not None:
@@ -307,14 +307,14 @@ class LLMClient:
                 self._record(hit, purpose=purpose, latency=hit.latency_s, attempts=0)
                 return hit
             if cfg.cache_only:
-                error = LLMError(f"cache-only: no cached completion for {purpose or 'this request'} "
-                                 f"(key {key[:12]}... under {cfg.cache_dir}); no live call was made. "
-                                 "Rerun without cache-only to ask the model.")
-                self._record(None, purpose=purpose, latency=0.0, attempts=0, error=str(error))
-                raise error
+                miss = LLMError(f"cache-only: no cached completion for {purpose or 'this request'} "
+                                f"(key {key[:12]}... under {cfg.cache_dir}); no live call was made. "
+                                "Rerun without cache-only to ask the model.")
+                self._record(None, purpose=purpose, latency=0.0, attempts=0, error=str(miss))
+                raise miss
         _import_litellm()  # seconds on first use; not part of the call's latency
         start = time.monotonic()
-        result, attempts, error = self._call_with_retries(messages, mock, temperature, seed)
+        result, attempts, error = self._call_with_retries(request, mock, temperature, seed)
         if error is not None:
             self._record(None, purpose=purpose, latency=time.monotonic() - start,
                          attempts=attempts, error=str(error))

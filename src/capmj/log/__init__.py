@@ -1,5 +1,5 @@
-"""Episode logs: :class:`RerunRecorder` writes one ``.rrd`` per episode; :func:`record_episode` runs
-an episode with it.
+"""Episode logs: :class:`RerunRecorder` writes one ``.rrd`` per episode.  Running an episode with
+it is :func:`capmj.runner.record_episode`: this package records, it does not run episodes.
 
 Modules, one concept each: :mod:`~capmj.log.paths` (entity paths: the file format),
 :mod:`~capmj.log.recorder` (the recorder), :mod:`~capmj.log.clock` (the monotonic ``sim_time``),
@@ -14,17 +14,14 @@ Importing this package is cheap: rerun is imported only when a recorder is creat
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from capmj.log.paths import SUMMARY_JSON_PATH, SUMMARY_PATH, SUMMARY_SCHEMA, text_entity
 
 if TYPE_CHECKING:
-    from capmj.agents.base import Budget
     from capmj.log.recorder import RerunRecorder
-    from capmj.runner import EpisodeResult
 
-__all__ = ["RerunRecorder", "record_episode", "SUMMARY_PATH", "SUMMARY_JSON_PATH", "SUMMARY_SCHEMA", "text_entity"]
+__all__ = ["RerunRecorder", "SUMMARY_PATH", "SUMMARY_JSON_PATH", "SUMMARY_SCHEMA", "text_entity"]
 
 
 def __getattr__(name: str) -> Any:  # lazy: keep `import capmj.log` free of rerun
@@ -32,38 +29,8 @@ def __getattr__(name: str) -> Any:  # lazy: keep `import capmj.log` free of reru
         from capmj.log.recorder import RerunRecorder
 
         return RerunRecorder
+    if name == "record_episode":  # moved to capmj.runner; the old import path still works
+        from capmj.runner import record_episode
+
+        return record_episode
     raise AttributeError(f"module 'capmj.log' has no attribute {name!r}")
-
-
-def _oracle_goals(task: Any, seed: int) -> tuple:
-    """The task's oracle goals for this seed (where objects should end), or () if they fail."""
-    from capmj.tasks.protocol import make_scene
-
-    try:
-        return tuple(task.oracle_goals(make_scene(task, seed)))
-    except Exception:  # noqa: BLE001 - the episode itself reports a broken task
-        return ()
-
-
-def record_episode(task: Any, seed: int, agent: Any, path: str | Path | None, *, images: bool = False,
-                   budget: "Budget | None" = None) -> "EpisodeResult":
-    """Run one episode; when ``path`` is given, log it to that ``.rrd`` (summary included) and return
-    the result with ``rrd`` set to the path.  With ``path=None`` nothing is logged."""
-    from dataclasses import replace
-
-    from capmj.runner import run_episode
-
-    if path is None:
-        return run_episode(task, seed, agent, budget=budget)
-    from capmj.log.recorder import RerunRecorder
-
-    name = getattr(task, "name", str(task))
-    rec = RerunRecorder(path, task=name, seed=seed, agent=getattr(agent, "name", None),
-                        model=getattr(agent, "model", None), images=images, goals=_oracle_goals(task, seed))
-    try:
-        result = run_episode(task, seed, agent, budget=budget, recorder=rec)
-        result = replace(result, rrd=str(path))
-        rec.finish(result)
-    finally:
-        rec.close()
-    return result

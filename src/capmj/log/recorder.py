@@ -158,7 +158,7 @@ class RerunRecorder:
         self._frames.append((t, label, dict(poses), reset or (self._frame_no - 1) % KEEP_EVERY == 0))
         if self._world is not None:
             held_id = self._world.suction.held
-            held = None if held_id is None else G.object_label(self._world.by_id[held_id])
+            held = None if held_id is None else G.object_label(self._world.objects_by_id[held_id])
             if held != self._held:
                 self._held = held
                 self._stamp(t, label)

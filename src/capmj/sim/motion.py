@@ -29,9 +29,47 @@ from capmj.sim.world import World
 
 Status = Literal["ok", "unreachable", "no_grip", "timeout", "held_nothing"]
 
+# Segment planning thresholds: numerical limits of the planner itself, not motion tuning (that is
+# MotionConfig).  Changing one changes which lines plan and how they are timed.
+
+MAX_JOINT_STEP = 0.5
+"""rad: the largest change of any joint between two consecutive timing samples (``ik_dt`` apart).
+At the 0.02 s sample spacing that is 25 rad/s, eight times the joint speed limit: no retiming can
+make such a jump trackable, it means the table crossed to another IK branch (a wrist
+singularity), so the line is refused rather than whipping the arm round."""
+
+RETIME_MARGIN = 1.05
+"""Each retiming slows down by the measured over-limit ratio times this: 5 % more than the ratio, so
+the next try (whose samples shift) lands under the joint limits instead of just over them again."""
+
+RETIME_RATIO_TOL = 1.0001
+"""A timing whose worst joint speed/acceleration ratio is at most this counts as within limits
+(0.01 % slack for rounding, so an exactly-at-limit timing is not stretched again)."""
+
+MAX_SLOWDOWN = 20.0
+"""The most a line's timing may be slowed down (nominal speed / 20).  A line that needs more is a
+crawl through a near-singular pose: it is refused as unreachable instead."""
+
+RETIME_TRIES = 6
+"""Timings computed for one line at most; if the last is still over the limits it is used as it is
+(the servos then lag slightly and ``converge`` closes the gap)."""
+
+MIN_BISECT_PATH = 1e-3
+"""m: a line's table is refined by bisection only down to 1 mm of path; an interval that short
+still off the line means the IK branch flipped inside it, and the line is refused."""
+
+EXECUTE_MAX_STEPS = 20000
+"""Physics steps (40 s simulated) one segment may take at most, a guard against a runaway plan."""
+
 
 @dataclass(frozen=True)
 class MotionConfig:
+    """Motion tuning of the arm.  ``yaw_path_length`` times the wrist turn (rad) counts as path
+    length, so a pure wrist rotation gets time and IK points like a move of that length does; 0.1 m
+    per rad turns the largest placement turn (45°) into ~8 cm.  ``retreat`` is how far the tip rises
+    straight up after letting go (after a place, at most to the transit height), so the cup leaves
+    the released object vertically before the next move goes sideways."""
+
     speed: float = 1.2            # m/s, free-space tip speed
     accel: float = 8.0            # m/s^2
     approach_speed: float = 0.25  # m/s for the last ``approach_gap`` before contact
@@ -42,7 +80,8 @@ class MotionConfig:
     joint_speed: float = 3.0      # rad/s (UR5e rating: 3.14)
     joint_accel: float = 20.0     # rad/s^2
     ik_dt: float = 0.02           # s between joint-space samples of a segment's timing
-    path_step: float = 0.05       # m of path (0.1 m per rad of wrist yaw) between IK solves before refinement
+    path_step: float = 0.05       # m of path (``yaw_path_length`` per rad of wrist yaw) between IK solves before refinement
+    yaw_path_length: float = 0.1  # m of path per rad of wrist yaw, for IK points and timing
     path_tol: float = 5e-4        # m tip error allowed by joint interpolation between IK solves
     path_rot_tol: float = 5e-3    # rad tool orientation error allowed the same way
     grip_dwell_steps: int = 10    # steps held after contact before lifting
@@ -51,6 +90,7 @@ class MotionConfig:
     settle_tol: float = 0.01      # m/s
     track_steps: int = 150        # max extra steps to converge at a segment end
     track_tol: float = 0.002      # m tip error accepted at a segment end
+    retreat: float = 0.1          # m the tip rises after a release
 
 
 @dataclass(frozen=True)
@@ -91,7 +131,7 @@ class Motion:
     # ------------------------------------------------------------------ segments
     def _profile(self, length: float, speed: float, accel: float) -> tuple[float, Callable[[float], float]]:
         """Trapezoidal profile: total time and s(t) in [0, 1]."""
-        if length < 1e-9:
+        if length < 1e-9:  # a zero-length segment (a float-noise length) takes no time
             return 0.0, lambda t: 1.0
         t_acc = speed / accel
         if accel * t_acc**2 >= length:  # triangular
@@ -123,9 +163,9 @@ class Motion:
         that joint interpolation between neighbours stays within ``path_tol``/``path_rot_tol``;
         None if a point is unreachable or the IK branch flips (a wrist singularity)."""
         cfg, ik = self.cfg, self.ik
-        extent = max(float(np.linalg.norm(end - start)), 0.1 * abs(yaw1 - yaw0))  # 0.1 m per rad, as the timing
+        extent = max(float(np.linalg.norm(end - start)), cfg.yaw_path_length * abs(yaw1 - yaw0))  # as the timing
         n = max(1, int(np.ceil(extent / cfg.path_step)))
-        min_ds = 1e-3 / max(extent, 1e-3)  # stop bisecting at 1 mm of path: the branch flipped
+        min_ds = MIN_BISECT_PATH / max(extent, MIN_BISECT_PATH)  # in s units; at most the whole line
 
         def point(a: float) -> tuple[np.ndarray, float]:
             return start + a * (end - start), yaw0 + a * (yaw1 - yaw0)
@@ -159,16 +199,16 @@ class Motion:
         """Joint samples for a straight tip line (yaw interpolated), or None if unreachable."""
         cfg = self.cfg
         length = float(np.linalg.norm(end - start))
-        # Treat wrist rotation as extra path length so pure rotations get time too (0.1 m per rad).
-        eff = max(length, 0.1 * abs(yaw1 - yaw0))
+        # Treat wrist rotation as extra path length so pure rotations get time too.
+        eff = max(length, cfg.yaw_path_length * abs(yaw1 - yaw0))
         q_prev = self.world.data.ctrl[:6].copy()
         table = self._line_table(start, end, yaw0, yaw1, q_prev)
         if table is None:
             return None
         s_tab, q_tab = table
         scale = 1.0
-        for _ in range(6):
-            if scale > 20.0:
+        for _ in range(RETIME_TRIES):
+            if scale > MAX_SLOWDOWN:
                 return None  # would need a crawl: the joints cannot follow this line
             total, s = self._profile(eff, speed / scale, cfg.accel / scale**2)
             n = max(1, int(np.ceil(total / cfg.ik_dt)))
@@ -176,17 +216,18 @@ class Motion:
             a = np.array([s(k * dt) for k in range(n + 1)])
             a[0] = 0.0
             arr = np.column_stack([np.interp(a, s_tab, q_tab[:, j]) for j in range(q_tab.shape[1])])
-            if np.max(np.abs(np.diff(arr, axis=0)), initial=0.0) > 0.5:
+            if np.max(np.abs(np.diff(arr, axis=0)), initial=0.0) > MAX_JOINT_STEP:
                 return None  # the IK branch flipped between samples (a wrist singularity)
             vel = np.diff(arr, axis=0) / dt
             acc = np.diff(vel, axis=0) / dt if len(vel) > 1 else np.zeros((1, 6))
             ratio = max(np.max(np.abs(vel)) / cfg.joint_speed, np.sqrt(np.max(np.abs(acc)) / cfg.joint_accel), 1.0)
-            if ratio <= 1.0001:
+            if ratio <= RETIME_RATIO_TOL:
                 return _Plan(arr, dt)
-            scale *= ratio * 1.05
+            scale *= ratio * RETIME_MARGIN
         return _Plan(arr, dt)
 
-    def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None, max_steps: int = 20000) -> tuple[bool, int]:
+    def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None,
+                max_steps: int = EXECUTE_MAX_STEPS) -> tuple[bool, int]:
         """Track a plan with velocity feed-forward; returns (stopped_early, steps).
 
         The whole control sequence is interpolated up front (vectorised) and stepped by

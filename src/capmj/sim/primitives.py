@@ -17,6 +17,13 @@ from capmj.sim.world import World
 
 _QUARTER = math.pi / 2
 
+AT_HEIGHT_TOL = 1e-3
+"""m: a tip this close below the transit height is already there; it does not rise first."""
+
+YAW_QUARTER_TURNS = range(-4, 5)
+"""Quarter turns tried around the current yaw when choosing a pick yaw: up to a full turn either
+way, so every tool yaw equivalent for the round cup within the wrist's reach is a candidate."""
+
 
 def _wrap(a: float, period: float) -> float:
     """``a`` reduced to [-period/2, period/2)."""
@@ -32,10 +39,18 @@ class Primitives:
         self.cfg = self.motion.cfg
 
     # ------------------------------------------------------------------ geometry
-    def surface_z(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
-        """Height of the highest object top under a disc at ``xy`` (0 for the bare table)."""
+    def highest_top_under(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
+        """Highest world-box top (m) of any object under a disc of ``radius`` at ``xy`` (0 for the
+        bare table): where a guarded descent there can first meet something.
+
+        A deliberately coarse, conservative bound for motion: axis-aligned boxes grown by the
+        cup's radius, zones counted, a bowl's rim rather than its floor.  The descent starts
+        ``approach_gap`` above it and stops at contact anyway.  It is not the height an object
+        comes to rest on (a bowl's floor, never a zone): that is the planner API's
+        :meth:`capmj.agents.footprints.Footprints.support_z`, on exact footprints.
+        """
         z = 0.0
-        for i in self.world.by_id:
+        for i in self.world.objects_by_id:
             if i == exclude:
                 continue
             lo, hi = self.world.aabb(i)
@@ -44,7 +59,8 @@ class Primitives:
         return z
 
     def highest_top(self, exclude: int | None = None) -> float:
-        tops = [self.world.top_z(i) for i in self.world.by_id if i != exclude]
+        """Highest object top (m) on the whole table (0 for the bare table): transit clears it."""
+        tops = [self.world.top_z(i) for i in self.world.objects_by_id if i != exclude]
         return max(tops, default=0.0)
 
     def _unwound_yaw(self, pos: np.ndarray) -> float:
@@ -58,7 +74,7 @@ class Primitives:
         base = m.commanded_yaw()
         q_near = self.world.data.ctrl[:6].copy()
         best, best_cost = base, (np.inf, 0)
-        for k in range(-4, 5):  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
+        for k in YAW_QUARTER_TURNS:  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
             yaw = base + k * _QUARTER
             q = m.ik.solve_analytic(pos, yaw, q_near)
             if q is not None and (abs(q[5]), abs(k)) < best_cost:
@@ -79,7 +95,7 @@ class Primitives:
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         tip = w.tip_pose()[0]
-        m.move_to(np.array([tip[0], tip[1], tip[2] + 0.1]), yaw)
+        m.move_to(np.array([tip[0], tip[1], tip[2] + cfg.retreat]), yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
 
     # ------------------------------------------------------------------ primitive
@@ -107,14 +123,14 @@ class Primitives:
         transit = max(cfg.min_transit_z, self.highest_top() + cfg.clearance)
         # 1. up, over, and down onto the pick point
         tip = w.tip_pose()[0]
-        if tip[2] < transit - 1e-3:
+        if tip[2] < transit - AT_HEIGHT_TOL:
             if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
                 return result("unreachable", None, "cannot rise to transit height")
         m.unwind_wrist()
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
-        surface = self.surface_z(pick[:2])
+        surface = self.highest_top_under(pick[:2])
         touching = lambda: w.suction.touching() is not None  # noqa: E731
         status, _ = m.move_to(np.array([pick[0], pick[1], surface + cfg.approach_gap]), yaw, stop=touching)
         if status == "ok":
@@ -129,7 +145,7 @@ class Primitives:
         # 2. lift high enough that the carried object clears everything, then carry
         obj_pose = w.pose(obj)
         tip = w.tip_pose()[0]
-        hang = tip[2] - (obj_pose.pos[2] - w.by_id[obj].half_extents[2])
+        hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
         transit = max(cfg.min_transit_z, self.highest_top(exclude=obj) + cfg.clearance + hang)
         if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
@@ -143,7 +159,7 @@ class Primitives:
         if len(place) > 2:
             centre_z = float(place[2])
         else:
-            centre_z = self.surface_z(place[:2], exclude=obj) + w.by_id[obj].half_extents[2]
+            centre_z = self.highest_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
@@ -158,6 +174,6 @@ class Primitives:
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         tip = w.tip_pose()[0]
-        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + 0.1)]), new_yaw)
+        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + cfg.retreat)]), new_yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
         return result("ok", obj)

@@ -45,7 +45,8 @@ class World:
         self.objects: tuple[ObjectSpec, ...] = compiled.objects
         self._compiled = compiled
         m = self.model
-        self.by_id = {o.obj_id: o for o in self.objects}
+        self.objects_by_id = {o.obj_id: o for o in self.objects}
+        """Every object's spec by its id, in ``objects`` order (a dict; ``Scene.by_id`` is a method)."""
         self.body_of = {o.obj_id: m.body(o.body).id for o in self.objects}
         self.arm_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in ARM_JOINTS])
         self.arm_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in ARM_JOINTS])
@@ -57,7 +58,7 @@ class World:
         self.movable_ids = tuple(o.obj_id for o in self.objects if not o.fixed)
         self.free_qpos = {i: int(m.jnt_qposadr[m.body_jntadr[self.body_of[i]]]) for i in self.movable_ids}
         self.free_dof = {i: int(m.jnt_dofadr[m.body_jntadr[self.body_of[i]]]) for i in self.movable_ids}
-        self.weld_of = {i: m.equality(f"suction_{self.by_id[i].body}").id for i in self.movable_ids}
+        self.weld_of = {i: m.equality(f"suction_{self.objects_by_id[i].body}").id for i in self.movable_ids}
         self.steps = 0
         self._listeners: list[tuple[FrameListener, int]] = []
         self.set_arm(np.array(HOME_QPOS))
@@ -150,7 +151,7 @@ class World:
         return Pose.of(self.data.xpos[b], self.data.xquat[b])
 
     def state(self) -> SceneState:
-        return SceneState(self.objects, {i: self.pose(i) for i in self.by_id}, self.time, self.suction.held)
+        return SceneState(self.objects, {i: self.pose(i) for i in self.objects_by_id}, self.time, self.suction.held)
 
     def top_z(self, obj_id: int) -> float:
         """World z of the highest point of an object (its axis-aligned box top)."""
