@@ -107,8 +107,8 @@ class RayGrid(RecordSink):
                 ray.shutdown()
         return self.stats
 
-    def _new_actor(self, concurrency: int) -> Any:
-        actor = self._remote.options(max_concurrency=concurrency, scheduling_strategy="SPREAD").remote(
+    def _new_actor(self, concurrency: int, cpus: float = 1.0) -> Any:
+        actor = self._remote.options(max_concurrency=concurrency, num_cpus=cpus, scheduling_strategy="SPREAD").remote(
             self.agent, self.registered, self.llm_limit)
         self._actors.append(actor)
         return actor
@@ -131,7 +131,11 @@ class RayGrid(RecordSink):
                     inflight[actors[i].run.remote(job)] = (i, job)
                     load[i] += 1
             if suspects and not any(i < 0 for i, _ in inflight.values()):
-                iso = iso or self._new_actor(1)
+                # The isolation actor claims no CPU: the workers (and the replacement of the one that
+                # died) hold every CPU the grid asked for, so an actor needing one would never be
+                # scheduled and ray.wait would block for ever (seen on a 2-CPU cluster).  It runs one
+                # suspect at a time, briefly, beside them.
+                iso = iso or self._new_actor(1, cpus=0.0)
                 job = suspects.popleft()
                 inflight[iso.run.remote(job)] = (-1, job)
             done, _ = ray.wait(list(inflight), num_returns=1)
