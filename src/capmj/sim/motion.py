@@ -158,12 +158,12 @@ class Motion:
         return total, s
 
     def _line_table(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float,
-                    q_start: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+                    q_start: np.ndarray, extent: float) -> tuple[np.ndarray, np.ndarray] | None:
         """IK solutions ``(s, q)`` along the line (path parameter ``s`` in [0, 1], ascending) such
         that joint interpolation between neighbours stays within ``path_tol``/``path_rot_tol``;
-        None if a point is unreachable or the IK branch flips (a wrist singularity)."""
+        None if a point is unreachable or the IK branch flips (a wrist singularity).  ``extent`` is
+        the line's effective length (rotation counted as in the timing)."""
         cfg, ik = self.cfg, self.ik
-        extent = max(float(np.linalg.norm(end - start)), cfg.yaw_path_length * abs(yaw1 - yaw0))  # as the timing
         n = max(1, int(np.ceil(extent / cfg.path_step)))
         min_ds = MIN_BISECT_PATH / max(extent, MIN_BISECT_PATH)  # in s units; at most the whole line
 
@@ -202,7 +202,7 @@ class Motion:
         # Treat wrist rotation as extra path length so pure rotations get time too.
         eff = max(length, cfg.yaw_path_length * abs(yaw1 - yaw0))
         q_prev = self.world.data.ctrl[:6].copy()
-        table = self._line_table(start, end, yaw0, yaw1, q_prev)
+        table = self._line_table(start, end, yaw0, yaw1, q_prev, eff)
         if table is None:
             return None
         s_tab, q_tab = table
