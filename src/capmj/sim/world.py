@@ -91,9 +91,14 @@ class World:
         for _ in range(n):
             mujoco.mj_step(m, d)
             self.steps += 1
-            for fn, every in self._listeners:
-                if self.steps % every == 0:
-                    fn(self)
+            if self._listeners:
+                self._notify()
+
+    def _notify(self) -> None:
+        """Call the frame listeners whose stride the step counter has just reached."""
+        for fn, every in self._listeners:
+            if self.steps % every == 0:
+                fn(self)
 
     def step_controls(self, ctrl: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[int, bool]:
         """One physics step per row of ``ctrl`` (the arm's six servo references); stops after the
@@ -113,9 +118,7 @@ class World:
             steps += 1
             self.steps += 1
             if listeners:
-                for fn, every in listeners:
-                    if self.steps % every == 0:
-                        fn(self)
+                self._notify()
             if stop is not None and stop():
                 return steps, True
         return steps, False
