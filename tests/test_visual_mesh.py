@@ -65,7 +65,7 @@ def test_light_meshes_are_cached_on_disk_and_a_damaged_cache_is_recomputed(
 
     monkeypatch.setenv(visual_mesh.CACHE_ENV, str(tmp_path))
     xml = str(robot.robot_source().xml_path)
-    compute = visual_mesh._light_meshes.__wrapped__  # bypass the in-process memo
+    compute = visual_mesh._stored_meshes  # the disk cache, below the in-process memo
     first = compute(xml)
     files = list(tmp_path.glob("ur5e-visual-*.npz"))
     assert len(files) == 1

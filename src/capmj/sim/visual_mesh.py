@@ -113,7 +113,14 @@ def _compute(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 @cache
-def _light_meshes(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _light_meshes(xml_path: str) -> dict[str, tuple[list[float], list[int]]]:
+    """Each mesh's flat vertex and face lists, as ``MjsMesh.uservert``/``userface`` take them:
+    converted once per process, not at every world build."""
+    return {name: (v.ravel().tolist(), f.ravel().tolist()) for name, (v, f) in _stored_meshes(xml_path).items()}
+
+
+def _stored_meshes(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The simplified meshes from the disk cache, else computed (and stored there)."""
     path = cache_dir() / f"ur5e-visual-{_cache_key(xml_path)}.npz"
     try:
         with np.load(path) as z:
@@ -142,8 +149,8 @@ def use_light_meshes(spec: mujoco.MjSpec, xml_path: str) -> None:
         vert, face = light[mesh.name]
         mesh.file = ""
         mesh.scale = [1.0, 1.0, 1.0]
-        mesh.uservert = vert.ravel().tolist()
-        mesh.userface = face.ravel().tolist()
+        mesh.uservert = vert
+        mesh.userface = face
 
 
 __all__ = ["CACHE_ENV", "VISUAL_CLUSTER_M", "cache_dir", "VISUAL_KEEP_FACES", "cluster", "simplify", "use_light_meshes"]
