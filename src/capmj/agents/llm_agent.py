@@ -32,7 +32,7 @@ from __future__ import annotations
 import os
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import attempt_facts
@@ -101,6 +101,17 @@ DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
 """Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
 
 
+def _at_least(name: str, value: Any, convert: Callable[[Any], Any], kind: str, minimum: float) -> Any:
+    """``convert(value)``, or a ConfigError naming ``name`` when it is not ``kind`` or below ``minimum``."""
+    try:
+        out = convert(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be {kind} >= {minimum}, got {value!r}") from None
+    if not out >= minimum:  # also rejects NaN
+        raise ConfigError(f"{name} must be >= {minimum}, got {out}")
+    return out
+
+
 class LLMAgent:
     """Plans with an LLM through the planner API; optional reporter and re-planning.
 
@@ -122,24 +133,14 @@ class LLMAgent:
                  price: str | None = None) -> None:
         if on_unknown not in ON_UNKNOWN:
             raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
-        try:
-            replan_temperature = float(replan_temperature)
-        except (TypeError, ValueError):
-            raise ConfigError(f"replan_temperature must be a number >= 0, got {replan_temperature!r}") from None
-        if not replan_temperature >= 0:
-            raise ConfigError(f"replan_temperature must be >= 0, got {replan_temperature}")
+        replan_temperature = _at_least("replan_temperature", replan_temperature, float, "a number", 0)
         if isinstance(replan_retries, bool) or not isinstance(replan_retries, int) or not (
                 0 <= replan_retries <= MAX_REPLAN_RETRIES):
             raise ConfigError(f"replan_retries (--replan-retries) must be an integer from 0 to {MAX_REPLAN_RETRIES} "
                               f"(0: never ask again after an identical re-plan), got {replan_retries!r}")
         if reporter not in REPORTERS:
             raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
-        try:
-            attempts = int(attempts)
-        except (TypeError, ValueError):
-            raise ConfigError(f"attempts must be an integer >= 1, got {attempts!r}") from None
-        if attempts < 1:
-            raise ConfigError(f"attempts must be >= 1, got {attempts}")
+        attempts = _at_least("attempts", attempts, int, "an integer", 1)
         if max_fn_depth < 0:
             raise ConfigError(f"max_fn_depth must be >= 0, got {max_fn_depth}")
         if cache_dir is None and os.environ.get(CACHE_ENV, "").strip():
