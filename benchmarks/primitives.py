@@ -158,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
     render_note = None
     modes = (("mesh_arm_rgbd", True, {"seg": False, "heightmap": False}),  # RGB + depth of the 3 views
              ("mesh_arm", True, {}), ("capsule_arm", False, {}))          # + segmentation + heightmap
-    for label, meshes, what in modes:
+    for label, meshes, what in modes if args.rendered > 0 else ():
         try:
             from capmj.sim.cameras import CameraRig
 
@@ -173,13 +173,13 @@ def main(argv: list[str] | None = None) -> int:
                 rig.render_all(**what)
                 wall += time.perf_counter() - t0
             rig.close()
-            rendered[label] = wall / args.rendered if args.rendered else None
+            rendered[label] = wall / args.rendered
         except Exception as exc:  # noqa: BLE001 - report, don't hide the other figures
             render_note = f"{label}: {type(exc).__name__}: {exc}"
             rendered[label] = None
 
     stack = {}
-    for h in range(2, 9):
+    for h in range(2, 9) if args.stack_trials > 0 else ():
         wins = sum(stack_trial(h, rng) for _ in range(args.stack_trials))
         stack[str(h)] = wins / args.stack_trials
         print(f"stack height {h}: {stack[str(h)]:.2f}", file=sys.stderr)

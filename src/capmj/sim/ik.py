@@ -9,6 +9,7 @@ model remove that error (< 0.05 mm).  mink needs ~2.4–4.4 ms per pose and dm_c
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -16,14 +17,12 @@ import numpy as np
 
 from capmj.sim.robot import CUP_LENGTH
 
-_DOWN = np.diag([1.0, -1.0, -1.0])  # tool z pointing at the table
-
-
 def tool_rotation(yaw: float) -> np.ndarray:
-    """Rotation of the suction tip frame pointing straight down, rotated by ``yaw`` about world z."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ _DOWN
+    """Rotation of the suction tip frame pointing straight down, rotated by ``yaw`` about world z:
+    ``Rz(yaw) @ diag(1, -1, -1)`` written out (the product has exact entries; the IK calls this
+    tens of times per line, where numpy's 3 x 3 product cost more than the solver)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
 
 
 @dataclass(frozen=True)
@@ -72,13 +71,20 @@ class SuctionIK:
         sols = self._solver.inverse_kinematics_with_tcp(target, self._tcp)
         if not sols:
             return None
-        q = np.asarray(sols, dtype=float)
+        q = np.array(sols, dtype=float)
         # Joints with 2*pi ranges admit q and q +- 2*pi: take the branch nearest q_near.
-        q = q_near + np.mod(q - q_near + np.pi, 2 * np.pi) - np.pi
-        ok = np.isfinite(q).all(axis=1) & (q >= self.lo).all(axis=1) & (q <= self.hi).all(axis=1)
+        q -= q_near
+        q += np.pi
+        np.mod(q, 2 * np.pi, out=q)
+        q += q_near
+        q -= np.pi
+        # NaN (a failed branch) fails both comparisons, so this also drops non-finite solutions.
+        ok = ((q >= self.lo) & (q <= self.hi)).all(axis=1)
         if not ok.any():
             return None
-        cost = np.where(ok, ((q - q_near) ** 2 * self._weights).sum(axis=1), np.inf)
+        dq = q - q_near
+        cost = (dq * dq * self._weights).sum(axis=1)
+        cost[~ok] = np.inf
         return q[int(np.argmin(cost))]
 
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:
@@ -101,18 +107,21 @@ class SuctionIK:
             jac[:3] = self._jacp[:, self.dadr]
             jac[3:] = self._jacr[:, self.dadr]
             q = q + jac.T @ np.linalg.solve(jac @ jac.T + self._damping, e)
-        ok = err < 1e-3 and bool(np.all(q >= self.lo) and np.all(q <= self.hi))
+        ok = err < 1e-3 and bool((q >= self.lo).all() and (q <= self.hi).all())
         return IKResult(q if ok else None, err)
 
     def pose_error(self, q: np.ndarray, pos: np.ndarray, yaw: float) -> tuple[float, float]:
         """(position error m, orientation error rad) of the tip at joints ``q`` against a
         downward-pointing target (private data; the world is untouched)."""
-        self.data.qpos[self.qadr] = q
-        mujoco.mj_kinematics(self.model, self.data)
-        e_pos = float(np.linalg.norm(pos - self.data.site_xpos[self.site]))
-        rot = tool_rotation(yaw) @ self.data.site_xmat[self.site].reshape(3, 3).T
-        # angle of the residual rotation: trace = 1 + 2 cos(angle)
-        e_rot = float(np.arccos(np.clip((np.trace(rot) - 1.0) / 2.0, -1.0, 1.0)))
+        d = self.data
+        d.qpos[self.qadr] = q
+        mujoco.mj_kinematics(self.model, d)
+        x, y, z = d.site_xpos[self.site]
+        e_pos = math.sqrt((pos[0] - x) ** 2 + (pos[1] - y) ** 2 + (pos[2] - z) ** 2)
+        # angle of the residual rotation R_target R_site^T: its trace = 1 + 2 cos(angle), and the
+        # trace of A B^T is the sum of the elementwise product
+        trace = float(np.dot(tool_rotation(yaw).ravel(), d.site_xmat[self.site]))
+        e_rot = math.acos(min(1.0, max(-1.0, (trace - 1.0) / 2.0)))
         return e_pos, e_rot
 
     def tip_position(self, q: np.ndarray) -> np.ndarray:

@@ -45,12 +45,17 @@ class Suction:
         self._suction_body, self._cup = suction_body, cup_geom
         self._geom_obj, self._body_of, self._weld_of = geom_obj, body_of, weld_of
         self._movable = frozenset(weld_of)
+        self._geom_obj_list: list[int] = [int(o) for o in geom_obj]
+        self._welds = list(weld_of.items())
 
     @property
     def held(self) -> int | None:
         """The object whose weld is active, if any."""
         active = self.data.eq_active
-        return next((i for i, e in self._weld_of.items() if active[e]), None)
+        for i, e in self._welds:
+            if active[e]:
+                return i
+        return None
 
     def touching(self) -> int | None:
         """The movable object the cup touches, if any (lowest obj_id when several).
@@ -105,13 +110,15 @@ class Suction:
         Called every physics step while a carried object is lowered, so it avoids building sets.
         """
         d = self.data
-        if d.ncon == 0:
+        n = d.ncon
+        if n == 0:
             return False
         held = self.held
         if held is None:
             return False
-        geoms = d.contact.geom[: d.ncon]
-        owners = self._geom_obj[geoms]
-        first, second = owners[:, 0] == held, owners[:, 1] == held
-        other = np.concatenate([geoms[first, 1], geoms[second, 0]])
-        return bool((other != self._cup).any())
+        # a handful of contacts: plain Python over them costs less than numpy's per-call overhead
+        owner, cup = self._geom_obj_list, self._cup
+        for g1, g2 in d.contact.geom[:n].tolist():
+            if (owner[g1] == held and g2 != cup) or (owner[g2] == held and g1 != cup):
+                return True
+        return False
