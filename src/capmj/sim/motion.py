@@ -129,31 +129,50 @@ class Motion:
         self._kp = gain
 
     # ------------------------------------------------------------------ segments
-    def _profile(self, length: float, speed: float, accel: float) -> tuple[float, Callable[[float], float]]:
-        """Trapezoidal profile: total time and s(t) in [0, 1]."""
-        if length < 1e-9:  # a zero-length segment (a float-noise length) takes no time
-            return 0.0, lambda t: 1.0
-        t_acc = speed / accel
-        if accel * t_acc**2 >= length:  # triangular
-            t_acc = float(np.sqrt(length / accel))
-            speed = accel * t_acc
-            total = 2 * t_acc
-        else:
-            total = 2 * t_acc + (length - accel * t_acc**2) / speed
+    @staticmethod
+    def _profile(length: float, speed: float, accel: float, slow_length: float = 0.0,
+                 slow_speed: float = 0.0) -> tuple[float, Callable[[np.ndarray], np.ndarray]]:
+        """Speed profile of a line: total time and the path fraction ``s(t)`` in [0, 1] (vectorised).
 
-        def s(t: float) -> float:
-            if t <= 0:
-                return 0.0
-            if t >= total:
-                return 1.0
-            if t < t_acc:
-                d = 0.5 * accel * t * t
-            elif t > total - t_acc:
-                r = total - t
-                d = length - 0.5 * accel * r * r
-            else:
-                d = 0.5 * accel * t_acc**2 + speed * (t - t_acc)
-            return min(1.0, d / length)
+        Trapezoidal (accelerate, cruise at ``speed``, decelerate to rest) when ``slow_length`` is 0.
+        Otherwise the last ``slow_length`` is run at ``slow_speed``: the arm decelerates from
+        ``speed`` to ``slow_speed`` as it reaches the slow part and only comes to rest at the end,
+        so a guarded descent is one line instead of a fast line ending at rest plus a slow one.
+        Where the line is too short for that (the slow part shorter than its own braking distance,
+        or the fast part shorter than reaching the slow speed) the whole line runs at the slow speed.
+        """
+        if length < 1e-9:  # a zero-length segment (a float-noise length) takes no time
+            return 0.0, lambda t: np.ones_like(t)
+        fast = length - slow_length
+        if slow_length > 0 and (slow_length < slow_speed**2 / (2 * accel) or fast < slow_speed**2 / (2 * accel)):
+            speed, slow_length, fast = slow_speed, 0.0, length
+        phases: list[tuple[float, float]] = []  # (duration, acceleration), starting at rest
+        if slow_length <= 0:
+            peak = min(speed, float(np.sqrt(length * accel)))
+            cruise = max(0.0, length - peak * peak / accel)
+            phases = [(peak / accel, accel), (cruise / peak, 0.0), (peak / accel, -accel)]
+        else:
+            peak = min(speed, float(np.sqrt(accel * fast + slow_speed**2 / 2)))
+            cruise = max(0.0, fast - (2 * peak * peak - slow_speed**2) / (2 * accel))
+            brake = slow_speed**2 / (2 * accel)
+            phases = [(peak / accel, accel), (cruise / peak, 0.0), ((peak - slow_speed) / accel, -accel),
+                      ((slow_length - brake) / slow_speed, 0.0), (slow_speed / accel, -accel)]
+        starts, t0, v0, d0 = [], 0.0, 0.0, 0.0
+        for dur, acc in phases:
+            starts.append((t0, v0, d0, acc))
+            t0, v0, d0 = t0 + dur, v0 + acc * dur, d0 + v0 * dur + 0.5 * acc * dur * dur
+        total = t0
+        t_start = np.array([p[0] for p in starts])
+        v_start = np.array([p[1] for p in starts])
+        d_start = np.array([p[2] for p in starts])
+        a_phase = np.array([p[3] for p in starts])
+
+        def s(t: np.ndarray) -> np.ndarray:
+            t = np.clip(np.asarray(t, float), 0.0, total)
+            k = np.searchsorted(t_start, t, side="right") - 1
+            tau = t - t_start[k]
+            d = d_start[k] + v_start[k] * tau + 0.5 * a_phase[k] * tau * tau
+            return np.clip(d / length, 0.0, 1.0)
 
         return total, s
 
@@ -195,12 +214,15 @@ class Motion:
             qs.insert(i + 1, res.q)
         return np.array(ss), np.array(qs)
 
-    def plan_line(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float, speed: float) -> _Plan | None:
-        """Joint samples for a straight tip line (yaw interpolated), or None if unreachable."""
+    def plan_line(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float, speed: float,
+                  slow_last: float = 0.0) -> _Plan | None:
+        """Joint samples for a straight tip line (yaw interpolated), or None if unreachable; the
+        last ``slow_last`` metres at ``approach_speed`` (see :meth:`_profile`)."""
         cfg = self.cfg
         length = float(np.linalg.norm(end - start))
         # Treat wrist rotation as extra path length so pure rotations get time too.
         eff = max(length, cfg.yaw_path_length * abs(yaw1 - yaw0))
+        slow = eff * min(1.0, slow_last / length) if slow_last > 0 and length > 0 else 0.0
         q_prev = self.world.data.ctrl[:6].copy()
         table = self._line_table(start, end, yaw0, yaw1, q_prev, eff)
         if table is None:
@@ -210,10 +232,10 @@ class Motion:
         for _ in range(RETIME_TRIES):
             if scale > MAX_SLOWDOWN:
                 return None  # would need a crawl: the joints cannot follow this line
-            total, s = self._profile(eff, speed / scale, cfg.accel / scale**2)
+            total, s = self._profile(eff, speed / scale, cfg.accel / scale**2, slow, cfg.approach_speed / scale)
             n = max(1, int(np.ceil(total / cfg.ik_dt)))
             dt = total / n if total > 0 else cfg.ik_dt
-            a = np.array([s(k * dt) for k in range(n + 1)])
+            a = s(np.arange(n + 1) * dt)
             a[0] = 0.0
             arr = np.column_stack([np.interp(a, s_tab, q_tab[:, j]) for j in range(q_tab.shape[1])])
             if np.max(np.abs(np.diff(arr, axis=0)), initial=0.0) > MAX_JOINT_STEP:
@@ -248,9 +270,9 @@ class Motion:
             acc = np.diff(vel, axis=0) / dt
             full = np.zeros((w.model.nv, w.model.nv))
             mujoco.mj_fullM(w.model, w.data, full)
-            inertia = full[w.arm_dof, w.arm_dof]
+            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]  # the arm's block, coupling included
             ctrl = qs[i] + a * (qs[i + 1] - qs[i]) + self._ff * (vel[i] + a * (vel[i + 1] - vel[i])) \
-                + (inertia / self._kp) * acc[i]
+                + (acc[i] @ inertia.T) / self._kp
         else:
             ctrl = np.empty((0, 6))
         steps, stopped = w.step_controls(ctrl, stop)
@@ -297,8 +319,10 @@ class Motion:
         return float(np.arctan2(rot[1, 0], rot[0, 0]))
 
     def move_to(self, pos: np.ndarray, yaw: float, speed: float | None = None,
-                stop: Callable[[], bool] | None = None) -> tuple[str, int]:
+                stop: Callable[[], bool] | None = None, slow_last: float = 0.0) -> tuple[str, int]:
         """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps).
+        The last ``slow_last`` metres run at ``approach_speed`` without stopping first (a guarded
+        descent: fast through free space, slow where contact is expected).
 
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
@@ -306,7 +330,7 @@ class Motion:
         start = self.ik.tip_position(self.world.data.ctrl[:6].copy())
         yaw0 = self.commanded_yaw()
         yaw0 = yaw + ((yaw0 - yaw + np.pi) % (2 * np.pi) - np.pi)  # same angle, nearest the goal
-        plan = self.plan_line(start, np.asarray(pos, float), yaw0, yaw, speed or self.cfg.speed)
+        plan = self.plan_line(start, np.asarray(pos, float), yaw0, yaw, speed or self.cfg.speed, slow_last)
         if plan is None:
             return "unreachable", 0
         stopped, steps = self.execute(plan, stop)

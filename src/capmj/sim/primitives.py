@@ -63,6 +63,11 @@ class Primitives:
         tops = [self.world.top_z(i) for i in self.world.objects_by_id if i != exclude]
         return max(tops, default=0.0)
 
+    def transit_height(self, exclude: int | None = None, hang: float = 0.0) -> float:
+        """Tip height (m) for moving sideways: ``clearance`` above every object's top (but
+        ``exclude``, the carried one) plus ``hang``, how far a carried object reaches below the tip."""
+        return max(self.cfg.min_transit_z, self.highest_top(exclude=exclude) + self.cfg.clearance + hang)
+
     def _unwound_yaw(self, pos: np.ndarray) -> float:
         """A tool yaw for reaching ``pos`` that keeps the last wrist joint near zero.
 
@@ -120,7 +125,7 @@ class Primitives:
 
         if w.suction.held is not None:
             w.suction.release()
-        transit = max(cfg.min_transit_z, self.highest_top() + cfg.clearance)
+        transit = self.transit_height()
         # 1. up, over, and down onto the pick point
         tip = w.tip_pose()[0]
         if tip[2] < transit - AT_HEIGHT_TOL:
@@ -132,10 +137,8 @@ class Primitives:
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         surface = self.highest_top_under(pick[:2])
         touching = lambda: w.suction.touching() is not None  # noqa: E731
-        status, _ = m.move_to(np.array([pick[0], pick[1], surface + cfg.approach_gap]), yaw, stop=touching)
-        if status == "ok":
-            status, _ = m.move_to(np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw,
-                                  speed=cfg.approach_speed, stop=touching)
+        m.move_to(np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw, stop=touching,
+                  slow_last=cfg.approach_gap + cfg.overshoot)
         obj = w.suction.grip()
         if obj is None:
             m.move_to(np.array([pick[0], pick[1], transit]), yaw)
@@ -146,7 +149,7 @@ class Primitives:
         obj_pose = w.pose(obj)
         tip = w.tip_pose()[0]
         hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
-        transit = max(cfg.min_transit_z, self.highest_top(exclude=obj) + cfg.clearance + hang)
+        transit = self.transit_height(exclude=obj, hang=hang)
         if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
             self._put_back(pick, yaw)
             return result("unreachable", obj, "cannot lift to transit height")
@@ -167,13 +170,15 @@ class Primitives:
 
         # 3. down until the carried object touches, release, retreat, settle
         placed = w.suction.held_touches_other
-        status, _ = m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z + cfg.approach_gap]), new_yaw, stop=placed)
-        if status == "ok":
-            m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw,
-                      speed=cfg.approach_speed, stop=placed)
+        m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw, stop=placed,
+                  slow_last=cfg.approach_gap + cfg.overshoot)
         w.suction.release()
         w.step(cfg.release_dwell_steps)
+        # Retreat straight up, on to the height the next primitive starts its transit at: one
+        # vertical move instead of a retreat that stops and a rise that starts again.
         tip = w.tip_pose()[0]
-        m.move_to(np.array([tip[0], tip[1], min(transit, tip[2] + cfg.retreat)]), new_yaw)
+        up = min(transit, tip[2] + cfg.retreat)
+        if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), new_yaw)[0] == "unreachable":
+            m.move_to(np.array([tip[0], tip[1], up]), new_yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
         return result("ok", obj)
