@@ -190,12 +190,14 @@ class Motion:
             return start + a * (end - start), yaw0 + a * (yaw1 - yaw0)
 
         ss, qs = [0.0], [q_start]
+        offset = None  # the last solve's analytic-model error, seeding the next (see SuctionIK.solve)
         for k in range(1, n + 1):  # coarse chain, each solve seeded by the previous one
-            res = ik.solve(*point(k / n), qs[-1])
+            res = ik.solve(*point(k / n), qs[-1], offset=offset)
             if res.q is None:
                 return None
             ss.append(k / n)
             qs.append(res.q)
+            offset = res.offset
         i = 0
         while i < len(ss) - 1:  # refine each interval until its midpoint is within tolerance
             a, b = ss[i], ss[i + 1]
@@ -207,9 +209,10 @@ class Motion:
                 continue
             if b - a < min_ds:
                 return None
-            res = ik.solve(pos, yaw, q_mid)
+            res = ik.solve(pos, yaw, q_mid, offset=offset)
             if res.q is None:
                 return None
+            offset = res.offset
             ss.insert(i + 1, mid)
             qs.insert(i + 1, res.q)
         return np.array(ss), np.array(qs)
