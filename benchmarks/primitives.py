@@ -7,9 +7,13 @@ without rendering on every trial, and with the three cameras + heightmap rendere
 primitive on ``--rendered`` extra trials: RGB + depth of the three views (one pass each, mesh arm),
 then everything (segmentation and heightmap too) with the arm's visual meshes and with its
 collision capsules (``CameraRig(robot_meshes=False)``).  Speed-ups are against the PyBullet Ravens
-oracle with its EGL renderer (constants below).  The stacking part builds towers of 2–8 small blocks.
+oracle with its EGL renderer: ``--ravens FILE`` takes a same-day ``benchmarks/ravens_baseline.py``
+JSON (else issue #17's quoted figures).  Like Ravens' per-action time (``env.step`` without
+observations: primitive and waiting until static), they compare the ``pick_and_place`` call
+(primitive and settling), not the trial's own choice of what to move where.  The stacking part
+builds towers of 2–8 small blocks.
 
-    python benchmarks/primitives.py [--trials 1000] [--seed 0]
+    python benchmarks/primitives.py [--trials 1000] [--seed 0] [--ravens ravens.json]
 """
 
 from __future__ import annotations
@@ -31,10 +35,24 @@ from capmj.tasks import predicates as P  # noqa: E402
 from capmj.tasks.spawn import Spawner, free_positions  # noqa: E402
 
 RAVENS_EGL_S = {"fast": 0.92, "slow": 1.14}
-"""PyBullet Ravens oracle, EGL renderer on, per pick-and-place without observations (issue #17's
-side-by-side run on this machine; PyBullet is not installed here, so it is quoted, not re-run)."""
+"""PyBullet Ravens oracle, EGL renderer on, per pick-and-place without observations, as quoted by
+issue #17.  Used only without ``--ravens``; a same-day run of ``benchmarks/ravens_baseline.py``
+(``--ravens FILE``) is the honest comparison, since this machine's speed varies from day to day."""
 RAVENS_EGL_RENDERED_S = {"fast": 1.30, "slow": 1.85}
 """The same with its three RGB-D cameras rendered after each action."""
+
+
+def ravens_reference(path: str | None) -> tuple[str, dict[str, float], dict[str, float]]:
+    """(source, seconds per action without observations, with them) to compare against: the
+    median and mean of a ``ravens_baseline.py`` JSON, or the quoted constants."""
+    if path is None:
+        return "quoted constants (issue #17)", RAVENS_EGL_S, RAVENS_EGL_RENDERED_S
+    with open(path, encoding="utf-8") as f:
+        run = json.load(f)
+    per = run["per_action_s"]
+    pick = ("median", "mean")
+    return (f"{path}: ravens_baseline.py, {run.get('renderer')}, hz {run.get('hz')}",
+            {k: per["no_obs"][k] for k in pick}, {k: per["with_obs"][k] for k in pick})
 COLORS = ["red", "blue", "green", "yellow", "orange", "purple", "pink", "cyan"]
 
 
@@ -109,7 +127,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--per-world", type=int, default=25, help="trials before the world is rebuilt")
     ap.add_argument("--rendered", type=int, default=100, help="trials also timed with rendering")
     ap.add_argument("--stack-trials", type=int, default=20, help="towers per height (2..8)")
+    ap.add_argument("--ravens", metavar="FILE", help="JSON of benchmarks/ravens_baseline.py run the same day "
+                    "(default: the ratios use issue #17's quoted Ravens figures)")
     args = ap.parse_args(argv)
+    ravens_source, ravens_plain, ravens_rendered = ravens_reference(args.ravens)
     rng = np.random.default_rng(args.seed)
 
     successes, errors, kinds, failures = 0, [], {"table": 0, "onto-block": 0}, []
@@ -150,9 +171,9 @@ def main(argv: list[str] | None = None) -> int:
             prims, rig = Primitives(w), CameraRig(w, robot_meshes=meshes)
             rig.render_all(**what)  # warm-up: GL context, mesh upload (one-off costs, see render.py)
             wall = 0.0
-            for _ in range(args.rendered):
+            for _ in range(args.rendered):  # the primitive and the rendering after it
+                wall += one_trial(w, prims, rng)[3]
                 t0 = time.perf_counter()
-                one_trial(w, prims, rng)
                 rig.render_all(**what)
                 wall += time.perf_counter() - t0
             rig.close()
@@ -185,9 +206,12 @@ def main(argv: list[str] | None = None) -> int:
         "sim_s_per_primitive": sim_s / args.trials,
         "physics_steps_per_s": steps / wall_plain,
         "mj_step_share_of_wall": step_share,
-        "speedup_vs_ravens_egl": {k: round(v / (wall_plain / args.trials), 1) for k, v in RAVENS_EGL_S.items()},
+        "ravens_egl_source": ravens_source,
+        "ravens_egl_s": ravens_plain,
+        "ravens_egl_rendered_s": ravens_rendered,
+        "speedup_vs_ravens_egl": {k: round(v / (wall_prim / args.trials), 1) for k, v in ravens_plain.items()},
         "speedup_vs_ravens_egl_rendered_rgbd": (
-            {k: round(v / rendered["mesh_arm_rgbd"], 1) for k, v in RAVENS_EGL_RENDERED_S.items()}
+            {k: round(v / rendered["mesh_arm_rgbd"], 1) for k, v in ravens_rendered.items()}
             if rendered.get("mesh_arm_rgbd") else None),
         "stack_success_by_height": stack,
         "stack_trials_per_height": args.stack_trials,
