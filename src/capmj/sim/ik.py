@@ -131,6 +131,19 @@ class SuctionIK:
         ok = err < 1e-3 and bool((q >= self.lo).all() and (q <= self.hi).all())
         return IKResult(q if ok else None, err)
 
+    def joint_rate(self, q: np.ndarray, lin: np.ndarray, yaw_rate: float) -> np.ndarray:
+        """Joint velocity moving the tip at linear velocity ``lin`` while it turns about the
+        vertical at ``yaw_rate`` (pointing down throughout): ``J(q)^-1 [lin; 0, 0, yaw_rate]``."""
+        m, d, jac = self.model, self.data, self._jac
+        d.qpos[self.qadr] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
+        jac[:3] = self._jacp[:, self.dadr]
+        jac[3:] = self._jacr[:, self.dadr]
+        twist = np.array([lin[0], lin[1], lin[2], 0.0, 0.0, yaw_rate])
+        return np.linalg.solve(jac + self._damping, twist)
+
     def pose_error(self, q: np.ndarray, pos: np.ndarray, yaw: float) -> tuple[float, float]:
         """(position error m, orientation error rad) of the tip at joints ``q`` against a
         downward-pointing target (private data; the world is untouched)."""
