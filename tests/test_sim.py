@@ -205,3 +205,40 @@ def test_segments_end_on_target_without_a_converge_wait() -> None:
     motion.execute(plan)
     stopped, extra = motion.converge(target)
     assert not stopped and extra == 0
+
+
+def test_guarded_descent_profile_brakes_to_the_approach_speed_before_the_slow_part() -> None:
+    """One line, fast then slow: the speed where the slow part begins is the approach speed, the
+    slow part never runs faster, the line ends at rest on its end, and no limit is exceeded."""
+    from capmj.sim.motion import Motion
+
+    length, slow, speed, slow_speed, accel = 0.2, 0.05, 1.2, 0.25, 8.0
+    total, s = Motion._profile(length, speed, accel, slow, slow_speed)
+    t = np.linspace(0.0, total, 20001)
+    x = s(t) * length
+    v = np.gradient(x, t)
+    assert x[0] == 0.0 and x[-1] == pytest.approx(length)
+    assert np.all(np.diff(x) >= -1e-12) and v.max() <= speed + 1e-3
+    assert np.interp(length - slow, x, v) == pytest.approx(slow_speed, abs=2e-3)
+    assert v[x > length - slow + 1e-4].max() <= slow_speed + 2e-3
+    assert np.abs(np.gradient(v, t)[5:-5]).max() <= accel * 1.01
+    # a single-speed line reaches the same end in less time than fast + stop + slow would
+    fast_total, _ = Motion._profile(length - slow, speed, accel)
+    slow_total, _ = Motion._profile(slow, slow_speed, accel)
+    assert total < fast_total + slow_total
+
+
+def test_ik_seeded_with_a_neighbours_offset_lands_within_tolerance() -> None:
+    """Seeding a solve with the correction of a solve 20 cm away gives the same pose (within the
+    solver's 0.1 mm tolerance) as solving from the analytic solution alone."""
+    w = World([small(1, "red", 0.5, 0.2)])
+    ik = Primitives(w).motion.ik
+    q0 = w.data.ctrl[:6].copy()
+    first = ik.solve(np.array([0.4, -0.2, 0.2]), 0.3, q0)
+    assert first.q is not None and first.offset is not None
+    target = np.array([0.55, -0.05, 0.2])
+    seeded, plain = ik.solve(target, 0.3, first.q, offset=first.offset), ik.solve(target, 0.3, first.q)
+    assert seeded.q is not None and plain.q is not None
+    for q in (seeded.q, plain.q):
+        np.testing.assert_allclose(ik.tip_position(q), target, atol=1e-4)
+    np.testing.assert_allclose(seeded.q, plain.q, atol=1e-3)
