@@ -156,8 +156,7 @@ class RerunRecorder:
                           np.array([poses[n][1] for n in names], dtype=float).reshape(-1, 4))
 
     def frame_arrays(self, time: float, names: tuple[str, ...], pos: np.ndarray, quat: np.ndarray) -> None:
-        """:meth:`frame` with the poses as arrays, as they are buffered: ``pos`` (N, 3) and ``quat``
-        (N, 4, wxyz) rows of the bodies ``names``, kept by the recorder (pass fresh copies)."""
+        """:meth:`frame` with the poses as arrays, as they are buffered (:class:`capmj.record.ArrayFrames`)."""
         t, reset = self._clock.frame(time)  # the first frame after a reset is always kept
         label = self._prim + 1 if self._attached else self._prim
         if self._next_start is None:
