@@ -99,6 +99,7 @@ class RerunRecorder:
         self._clock = EpisodeClock()
         self._prim = 0              # primitives finished so far
         self._next_start: float | None = None  # time of the first frame after the latest primitive
+        self._held_id: int | None = None  # the gripped object, and its label (the cup shows it)
         self._held: str | None = None
         self._links: dict[str, str] = {}  # robot body -> entity path (after attach)
         self._static_bodies: set[str] = set()  # bodies with a static transform (fixed objects)
@@ -165,11 +166,13 @@ class RerunRecorder:
         self._poses.add(t, label, names, pos, quat, reset or (self._frame_no - 1) % KEEP_EVERY == 0)
         if self._world is not None:
             held_id = self._world.suction.held
-            held = None if held_id is None else G.object_label(self._world.objects_by_id[held_id])
-            if held != self._held:
-                self._held = held
-                self._stamp(t, label)
-                G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
+            if held_id != self._held_id:  # the label only changes with the gripped object
+                held = None if held_id is None else G.object_label(self._world.objects_by_id[held_id])
+                self._held_id = held_id
+                if held != self._held:
+                    self._held = held
+                    self._stamp(t, label)
+                    G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
         if len(self._poses) >= _FLUSH_FRAMES:
             self._flush_frames()
 
