@@ -2,12 +2,13 @@
 
 Every layer may emit events through a :class:`Recorder` without knowing where they go; the rerun
 writer in :mod:`capmj.log` implements it, and :class:`NullRecorder` is the default so that running
-an episode never requires a logger.
+an episode never requires a logger.  A recorder that stores poses by the thousand may also take
+them as arrays (:class:`ArrayFrames`), which spares the runner building a dict of tuples per frame.
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Protocol
+from typing import Any, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -33,6 +34,16 @@ class Recorder(Protocol):
 
     def close(self) -> None:
         ...
+
+
+@runtime_checkable
+class ArrayFrames(Protocol):
+    """The array form of :meth:`Recorder.frame`, for recorders that offer it (the runner prefers it)."""
+
+    def frame_arrays(self, time: float, names: tuple[str, ...], pos: np.ndarray, quat: np.ndarray) -> None:
+        """Poses of the bodies ``names`` at simulated ``time``: ``pos`` (N, 3) and ``quat_wxyz``
+        (N, 4) rows in ``names`` order.  The arrays are the recorder's to keep: the caller passes
+        fresh copies."""
 
 
 class NullRecorder:

@@ -13,9 +13,11 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
-from capmj.record import NullRecorder, Recorder
+from capmj.record import ArrayFrames, NullRecorder, Recorder
 from capmj.sim.world import World
 from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import Task, make_scene
@@ -58,15 +60,20 @@ def _error_text(exc: BaseException) -> str:
 
 
 def _attach_frames(world: World, recorder: Recorder) -> None:
-    names = {o.obj_id: o.body for o in world.objects}
-    links = [world.model.body(i).name for i in range(1, world.model.nbody) if world.model.body(i).name not in names.values()]
-    link_ids = [world.model.body(n).id for n in links]
-
-    def emit(w: World) -> None:
-        poses = {names[i]: (tuple(w.data.xpos[w.body_of[i]]), tuple(w.data.xquat[w.body_of[i]])) for i in names}
-        for n, b in zip(links, link_ids):
-            poses[n] = (tuple(w.data.xpos[b]), tuple(w.data.xquat[b]))
-        recorder.frame(w.time, poses)
+    """Send the recorder every body's pose now and every FRAME_EVERY_STEPS physics steps: the
+    objects, then the robot's bodies.  A recorder taking arrays (:class:`ArrayFrames`) gets one
+    copy of MuJoCo's pose arrays per frame, the others a dict of tuples."""
+    m = world.model
+    objects = {o.obj_id: o.body for o in world.objects}
+    links = [m.body(i).name for i in range(1, m.nbody) if m.body(i).name not in objects.values()]
+    names = (*objects.values(), *links)
+    ids = np.array([world.body_of[i] for i in objects] + [m.body(n).id for n in links], dtype=np.intp)
+    if isinstance(recorder, ArrayFrames):
+        def emit(w: World) -> None:
+            recorder.frame_arrays(w.time, names, w.data.xpos[ids], w.data.xquat[ids])
+    else:
+        def emit(w: World) -> None:
+            recorder.frame(w.time, {n: (tuple(p), tuple(q)) for n, p, q in zip(names, w.data.xpos[ids], w.data.xquat[ids])})
 
     emit(world)
     world.add_frame_listener(emit, FRAME_EVERY_STEPS)

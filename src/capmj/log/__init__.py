@@ -2,7 +2,8 @@
 it is :func:`capmj.runner.record_episode`: this package records, it does not run episodes.
 
 Modules, one concept each: :mod:`~capmj.log.paths` (entity paths: the file format),
-:mod:`~capmj.log.recorder` (the recorder), :mod:`~capmj.log.clock` (the monotonic ``sim_time``),
+:mod:`~capmj.log.recorder` (the recorder), :mod:`~capmj.log.poses` (body poses between flushes,
+and which are re-sent), :mod:`~capmj.log.clock` (the monotonic ``sim_time``),
 :mod:`~capmj.log.images` (camera images), :mod:`~capmj.log.geometry` (table, object shapes,
 robot), :mod:`~capmj.log.robot_mesh` (UR5e visual meshes with trimesh),
 :mod:`~capmj.log.verdict3d` (failing objects, diagnostics and targets in 3D),

@@ -6,8 +6,8 @@ being executed, so selecting primitive k shows the world when primitive k ended,
 index shows the final judged state).
 
 Frames arrive every 25 physics steps (20 Hz); every other one is kept (see ``KEEP_EVERY``), they
-are buffered and sent as columns (one ``send_columns`` per body) at the end, and a body's pose is
-only re-sent when it changed (resting blocks cost one row; fixed objects have a static
+are buffered as arrays (:mod:`capmj.log.poses`) and sent as columns (one ``send_columns`` per
+body) at the end, and a body's pose is only re-sent when it changed (resting blocks cost one row; fixed objects have a static
 transform), which keeps logging cheap in time and bytes.  Meshes and shapes are static and logged
 once; only transforms change over time.
 
@@ -32,6 +32,7 @@ from capmj.log.clock import EpisodeClock
 from capmj.log.images import SceneCameras, depth_mm, image_entity
 from capmj.log.paths import (LOG_TEXTS, OBJECTS, PRIMITIVE_LOG, PRIMITIVES, ROBOT, STATIC_TEXTS, SUMMARY_JSON_PATH,
                              SUMMARY_PATH, SUMMARY_SCHEMA, attempt_entity, text_entity)
+from capmj.log.poses import PoseBuffer, changed_rows
 from capmj.log.summary import fmt_vec, jsonable, summary_markdown
 from capmj.sim.cameras import VIEW_CAMERAS
 from capmj.sim.pose import xyzw
@@ -49,7 +50,7 @@ KEEP_EVERY = 2
 """Every KEEP_EVERY-th frame is written (10 Hz of simulated time), plus the last frame of each
 primitive and of the episode and the first after a reset: the robot's link transforms are most
 of a log's bytes."""
-_POSE_EPS = 1e-5             # poses changing less than this (m / quaternion units) are not re-sent
+_XYZW = [4, 5, 6, 3]          # the quaternion of a [x, y, z, qw, qx, qy, qz] pose in rerun's order
 
 
 def _is_object(body: str) -> bool:
@@ -91,13 +92,14 @@ class RerunRecorder:
         # No footer: the manifest is for random access into large recordings and would double a
         # small episode log (measured 369 kB -> 200 kB); viewers and RrdReader read the stream.
         self.rec.save(str(self.path), write_footer=False)
-        self._frames: list[tuple[float, int, Mapping[str, Any], bool]] = []  # (t, label, poses, keep)
+        self._poses = PoseBuffer()
         self._bodies: set[str] = set()
         self._sent: dict[str, np.ndarray] = {}  # last pose sent per body (pos + quat)
         self._objects: dict[int, "ObjectSpec"] = {o.obj_id: o for o in objects or ()}
         self._clock = EpisodeClock()
         self._prim = 0              # primitives finished so far
         self._next_start: float | None = None  # time of the first frame after the latest primitive
+        self._held_id: int | None = None  # the gripped object, and its label (the cup shows it)
         self._held: str | None = None
         self._links: dict[str, str] = {}  # robot body -> entity path (after attach)
         self._static_bodies: set[str] = set()  # bodies with a static transform (fixed objects)
@@ -150,63 +152,58 @@ class RerunRecorder:
             self._log_images("initial")
 
     def frame(self, time: float, poses: Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]) -> None:
+        names = tuple(poses)
+        self.frame_arrays(time, names, np.array([poses[n][0] for n in names], dtype=float).reshape(-1, 3),
+                          np.array([poses[n][1] for n in names], dtype=float).reshape(-1, 4))
+
+    def frame_arrays(self, time: float, names: tuple[str, ...], pos: np.ndarray, quat: np.ndarray) -> None:
+        """:meth:`frame` with the poses as arrays, as they are buffered (:class:`capmj.record.ArrayFrames`)."""
         t, reset = self._clock.frame(time)  # the first frame after a reset is always kept
         label = self._prim + 1 if self._attached else self._prim
         if self._next_start is None:
             self._next_start = t
         self._frame_no += 1
-        self._frames.append((t, label, dict(poses), reset or (self._frame_no - 1) % KEEP_EVERY == 0))
+        self._poses.add(t, label, names, pos, quat, reset or (self._frame_no - 1) % KEEP_EVERY == 0)
         if self._world is not None:
             held_id = self._world.suction.held
-            held = None if held_id is None else G.object_label(self._world.objects_by_id[held_id])
-            if held != self._held:
-                self._held = held
-                self._stamp(t, label)
-                G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
-        if len(self._frames) >= _FLUSH_FRAMES:
+            if held_id != self._held_id:  # the label only changes with the gripped object
+                held = None if held_id is None else G.object_label(self._world.objects_by_id[held_id])
+                self._held_id = held_id
+                if held != self._held:
+                    self._held = held
+                    self._stamp(t, label)
+                    G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
+        if len(self._poses) >= _FLUSH_FRAMES:
             self._flush_frames()
 
     def _flush_frames(self, final_label: int | None = None) -> None:
-        if not self._frames:
+        table = self._poses.take()
+        if table is None:
             return
         rr = self._rr
-        frames = [f[:3] for i, f in enumerate(self._frames) if f[3] or i == len(self._frames) - 1]
-        self._frames = []
-        names: list[str] = []
-        for _, _, poses in frames:
-            names += [n for n in poses if n not in names]
-        for n in names:
+        bodies, entities = [], []  # the bodies with a transform over time, and their entities
+        for b, n in enumerate(table.names):
             ent = f"{OBJECTS}/{n}" if _is_object(n) else f"{ROBOT}/{n}"
-            if self._links.get(n, ent) != ent or n in self._static_bodies:  # nested in a link, or fixed
+            if self._links.get(n, ent) == ent and n not in self._static_bodies:  # not nested in a link, not fixed
+                bodies.append(b)
+                entities.append(ent)
+        names = [table.names[b] for b in bodies]
+        poses, present = table.poses[:, bodies], table.present[:, bodies]
+        last = np.array([self._sent.get(n, np.zeros(7)) for n in names]).reshape(-1, 7)
+        keep, last, sent = changed_rows(poses, present, last, np.array([n in self._sent for n in names], dtype=bool))
+        labels = table.labels if final_label is None else np.minimum(table.labels, final_label)
+        for j, (n, ent) in enumerate(zip(names, entities)):
+            if sent[j]:
+                self._sent[n] = last[j]
+            self._bodies.add(n)
+            rows = np.flatnonzero(keep[:, j])
+            if not len(rows):
                 continue
-            rows = self._changed_rows(n, [(t, lab, poses[n]) for t, lab, poses in frames if n in poses])
-            if not rows:
-                continue
-            self.rec.send_columns(ent, indexes=self._index(rows, final_label),
-                                  columns=rr.Transform3D.columns(
-                                      translation=np.array([r[2][0] for r in rows], dtype=np.float32),
-                                      quaternion=np.array([xyzw(r[2][1]) for r in rows], dtype=np.float32)))
-
-    def _changed_rows(self, key: str, rows: list) -> list:
-        """The rows whose pose differs from the last one sent for ``key`` (latest-at fills the gaps)."""
-        out = []
-        last = self._sent.get(key)
-        for t, lab, (pos, quat) in rows:
-            cur = np.concatenate([np.asarray(pos, float).ravel(), np.asarray(quat, float).ravel()])
-            if last is not None and last.shape == cur.shape and np.max(np.abs(cur - last)) < _POSE_EPS:
-                continue
-            last = cur
-            out.append((t, lab, (pos, quat)))
-        if last is not None:
-            self._sent[key] = last
-        self._bodies.add(key)
-        return out
-
-    def _index(self, rows: list, final_label: int | None) -> list:
-        rr = self._rr
-        labels = [r[1] if final_label is None else min(r[1], final_label) for r in rows]
-        return [rr.TimeColumn("sim_time", duration=np.array([r[0] for r in rows], dtype=np.float64)),
-                rr.TimeColumn("primitive", sequence=np.array(labels, dtype=np.int64))]
+            pose = poses[rows, j]
+            self.rec.send_columns(ent, indexes=[rr.TimeColumn("sim_time", duration=table.times[rows]),
+                                                rr.TimeColumn("primitive", sequence=labels[rows])],
+                                  columns=rr.Transform3D.columns(translation=pose[:, :3].astype(np.float32),
+                                                                 quaternion=pose[:, _XYZW].astype(np.float32)))
 
     def primitive(self, index: int, time: float, info: Mapping[str, Any]) -> None:
         """Log the primitive's pick/place markers on their own entity at the time it started (so
@@ -215,8 +212,7 @@ class RerunRecorder:
         t = self._clock.event(time)
         start = self._next_start if self._next_start is not None and self._next_start <= t else t
         self._next_start = None
-        if self._frames:  # the state at the end of a primitive is always kept
-            self._frames[-1] = (*self._frames[-1][:3], True)
+        self._poses.keep_last()  # the state at the end of a primitive is always kept
         self._prim = int(index)
         rec = {"index": int(index), "time": t, "start": start, **jsonable(dict(info))}
         self.primitive_log.append(rec)

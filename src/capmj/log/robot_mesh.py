@@ -9,18 +9,24 @@ decimation (``fast-simplification``) removes most of what is left, coarser than 
 a log should stay small, and a few thousand triangles keep the silhouette and the blue joint caps.  Vertex normals come from ``trimesh`` (rerun draws a mesh without normals
 unlit).
 
-The result depends only on the model's meshes, so it is computed once per process and reused by
-every episode.
+The result depends only on the model's meshes, so it is computed once per machine: kept in memory
+for the process and on disk in capmj's cache directory (:func:`capmj.sim.visual_mesh.cache_dir`),
+keyed by a hash of everything it is computed from.  A bench worker, which logs episodes from a
+fresh process, so loads ~50 kB instead of importing trimesh and simplifying (~1 s per worker).
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+import zipfile
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
 import numpy as np
 
-from capmj.sim.visual_mesh import cluster
+from capmj.sim.visual_mesh import cache_dir, cluster
 
 VISUAL_GROUP = 2
 """MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
@@ -68,20 +74,31 @@ def _geom_rgba(model: Any, g: int) -> np.ndarray:
     return np.clip(np.round(np.asarray(rgba) * 255), 0, 255).astype(np.uint8)
 
 
-def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
-    """The simplified visual mesh of each body in ``bodies`` that has visual mesh geoms."""
-    import mujoco
-    import trimesh
+GeomPart = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""A visual mesh geom's vertices (body frame), faces and RGBA."""
 
-    out: list[LinkMesh] = []
+
+def _visual_parts(model: Any, bodies: tuple[str, ...]) -> list[tuple[str, list[GeomPart]]]:
+    """Each body's visual mesh geoms, as the simplification takes them."""
+    import mujoco
+
+    out = []
     for name in bodies:
         bid = model.body(name).id
         geoms = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid)
                  if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == VISUAL_GROUP]
+        out.append((name, [(*_geom_part(model, g), _geom_rgba(model, g)) for g in geoms]))
+    return out
+
+
+def _simplified(parts: list[tuple[str, list[GeomPart]]], cell: float) -> list[LinkMesh]:
+    import trimesh
+
+    out: list[LinkMesh] = []
+    for name, geoms in parts:
         verts, faces, norms, cols = [], [], [], []
         offset = 0
-        for g in geoms:
-            v, f = _geom_part(model, g)
+        for v, f, rgba in geoms:
             tm = trimesh.Trimesh(v, f, process=True)  # welds MuJoCo's per-face vertex copies
             sv, sf = cluster(np.asarray(tm.vertices), np.asarray(tm.faces), cell)
             if not len(sf):
@@ -93,27 +110,80 @@ def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) ->
             verts.append(sv)
             faces.append(sf + offset)
             norms.append(np.asarray(part.vertex_normals))
-            cols.append(np.tile(_geom_rgba(model, g), (len(sv), 1)))
+            cols.append(np.tile(rgba, (len(sv), 1)))
             offset += len(sv)
         if not faces:
             continue
-        arrays = [np.concatenate(verts).astype(np.float32), np.concatenate(faces).astype(np.uint32),
-                  np.concatenate(norms).astype(np.float32), np.concatenate(cols)]
-        for a in arrays:
-            a.flags.writeable = False
-        out.append(LinkMesh(name, *arrays))
+        out.append(_link_mesh(name, np.concatenate(verts).astype(np.float32), np.concatenate(faces).astype(np.uint32),
+                              np.concatenate(norms).astype(np.float32), np.concatenate(cols)))
     return out
+
+
+def _link_mesh(body: str, *arrays: np.ndarray) -> LinkMesh:
+    for a in arrays:
+        a.flags.writeable = False
+    return LinkMesh(body, *arrays)
+
+
+def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
+    """The simplified visual mesh of each body in ``bodies`` that has visual mesh geoms."""
+    return _simplified(_visual_parts(model, bodies), cell)
+
+
+def _package_version(name: str) -> str:
+    try:
+        return version(name)
+    except PackageNotFoundError:
+        return "?"
+
+
+def _disk_key(parts: list[tuple[str, list[GeomPart]]], cell: float) -> str:
+    """Hash of the simplification's inputs, its parameters and the libraries that compute it."""
+    h = hashlib.sha256(f"{cell}|{KEEP_FACES}|{_package_version('trimesh')}|"
+                       f"{_package_version('fast-simplification')}|{np.__version__}".encode())
+    for name, geoms in parts:
+        h.update(f"|{name}:{len(geoms)}".encode())
+        for a in (a for g in geoms for a in g):
+            h.update(f"{a.dtype}{a.shape}".encode())
+            h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:24]
+
+
+_FIELDS = ("vertices", "faces", "normals", "colors")
+
+
+def _stored_link_meshes(model: Any, bodies: tuple[str, ...], cell: float) -> list[LinkMesh]:
+    """:func:`link_meshes` from the disk cache, else computed (and stored there)."""
+    parts = _visual_parts(model, bodies)
+    path = cache_dir() / f"ur5e-log-links-{_disk_key(parts, cell)}.npz"
+    try:
+        with np.load(path) as z:
+            return [_link_mesh(str(n), *(z[f"{f}{k}"] for f in _FIELDS)) for k, n in enumerate(z["names"])]
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):  # missing or damaged: recompute
+        pass
+    meshes = _simplified(parts, cell)
+    arrays: dict[str, np.ndarray] = {"names": np.array([lm.body for lm in meshes])}
+    for k, lm in enumerate(meshes):
+        arrays.update({f"{f}{k}": getattr(lm, f) for f in _FIELDS})
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, **arrays)  # type: ignore[arg-type]
+        os.replace(tmp, path)  # atomic: concurrent workers never read half a file
+    except OSError:
+        pass
+    return meshes
 
 
 _CACHE: dict[tuple[int, int, tuple[str, ...], float], list[LinkMesh]] = {}
 
 
 def cached_link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
-    """:func:`link_meshes`, computed once per process for the same mesh data (every episode's model
-    holds the same arm)."""
+    """:func:`link_meshes`, from memory after the first call of a process (every episode's model
+    holds the same arm), else from the disk cache, else computed."""
     key = (int(model.nmeshvert), int(model.nmeshface), tuple(bodies), float(cell))
     if key not in _CACHE:
-        _CACHE[key] = link_meshes(model, bodies, cell)
+        _CACHE[key] = _stored_link_meshes(model, bodies, cell)
     return _CACHE[key]
 
 
