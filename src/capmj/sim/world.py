@@ -21,6 +21,9 @@ from capmj.sim.suction import Suction, contact_owners
 
 FrameListener = Callable[["World"], None]
 
+_NEVER = 2**62
+"""A step count no episode reaches: when no frame listener is due."""
+
 
 @dataclass(frozen=True)
 class WorldSnapshot:
@@ -61,6 +64,7 @@ class World:
         self.weld_of = {i: m.equality(f"suction_{self.objects_by_id[i].body}").id for i in self.movable_ids}
         self.steps = 0
         self._listeners: list[tuple[FrameListener, int]] = []
+        self._next_notify = _NEVER  # the step count at which the next listener is due
         self.set_arm(np.array(HOME_QPOS))
         mujoco.mj_forward(m, self.data)
         self.suction = Suction(m, self.data, suction_body=m.body(SUCTION_BODY).id, cup_geom=self.cup_geom,
@@ -91,7 +95,7 @@ class World:
         for _ in range(n):
             mujoco.mj_step(m, d)
             self.steps += 1
-            if self._listeners:
+            if self.steps >= self._next_notify:
                 self._notify()
 
     def _notify(self) -> None:
@@ -99,6 +103,13 @@ class World:
         for fn, every in self._listeners:
             if self.steps % every == 0:
                 fn(self)
+        self._schedule()
+
+    def _schedule(self) -> None:
+        """When the next listener is due: the stepping loops compare one integer per step instead
+        of taking every listener's modulo (a third of the per-step Python cost when logging)."""
+        self._next_notify = min((((self.steps // every) + 1) * every for _, every in self._listeners),
+                                default=_NEVER)
 
     def step_controls(self, ctrl: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[int, bool]:
         """One physics step per row of ``ctrl`` (the arm's six servo references); stops after the
@@ -109,7 +120,6 @@ class World:
         beyond the physics.
         """
         m, d, mj_step = self.model, self.data, mujoco.mj_step
-        listeners = self._listeners
         arm = d.ctrl[:6]
         steps = 0
         for row in ctrl:
@@ -117,7 +127,7 @@ class World:
             mj_step(m, d)
             steps += 1
             self.steps += 1
-            if listeners:
+            if self.steps >= self._next_notify:
                 self._notify()
             if stop is not None and stop():
                 return steps, True
@@ -126,6 +136,7 @@ class World:
     def add_frame_listener(self, fn: FrameListener, every_steps: int = 25) -> None:
         """Call ``fn(world)`` every ``every_steps`` physics steps (e.g. to log transforms)."""
         self._listeners.append((fn, max(1, int(every_steps))))
+        self._schedule()
 
     def max_object_speed(self) -> float:
         if not self.movable_ids:
@@ -187,4 +198,5 @@ class World:
         mujoco.mj_setState(self.model, self.data, snap.physics, mujoco.mjtState.mjSTATE_INTEGRATION)
         self.model.eq_data[:] = snap.eq_data
         self.steps = snap.steps
+        self._schedule()
         mujoco.mj_forward(self.model, self.data)
