@@ -18,15 +18,13 @@ fresh process, so loads ~50 kB instead of importing trimesh and simplifying (~1 
 from __future__ import annotations
 
 import hashlib
-import os
-import zipfile
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
-from capmj.sim.visual_mesh import cache_dir, cluster
+from capmj.sim.visual_mesh import cached_arrays, cluster
 
 VISUAL_GROUP = 2
 """MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
@@ -155,24 +153,18 @@ _FIELDS = ("vertices", "faces", "normals", "colors")
 def _stored_link_meshes(model: Any, bodies: tuple[str, ...], cell: float) -> list[LinkMesh]:
     """:func:`link_meshes` from the disk cache, else computed (and stored there)."""
     parts = _visual_parts(model, bodies)
-    path = cache_dir() / f"ur5e-log-links-{_disk_key(parts, cell)}.npz"
-    try:
-        with np.load(path) as z:
-            return [_link_mesh(str(n), *(z[f"{f}{k}"] for f in _FIELDS)) for k, n in enumerate(z["names"])]
-    except (OSError, KeyError, ValueError, zipfile.BadZipFile):  # missing or damaged: recompute
-        pass
-    meshes = _simplified(parts, cell)
-    arrays: dict[str, np.ndarray] = {"names": np.array([lm.body for lm in meshes])}
-    for k, lm in enumerate(meshes):
-        arrays.update({f"{f}{k}": getattr(lm, f) for f in _FIELDS})
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, **arrays)  # type: ignore[arg-type]
-        os.replace(tmp, path)  # atomic: concurrent workers never read half a file
-    except OSError:
-        pass
-    return meshes
+
+    def compute() -> dict[str, np.ndarray]:
+        meshes = _simplified(parts, cell)
+        arrays: dict[str, np.ndarray] = {"names": np.array([lm.body for lm in meshes])}
+        for k, lm in enumerate(meshes):
+            arrays.update({f"{f}{k}": getattr(lm, f) for f in _FIELDS})
+        return arrays
+
+    def decode(z: Mapping[str, np.ndarray]) -> list[LinkMesh]:
+        return [_link_mesh(str(n), *(np.array(z[f"{f}{k}"]) for f in _FIELDS)) for k, n in enumerate(z["names"])]
+
+    return cached_arrays(f"ur5e-log-links-{_disk_key(parts, cell)}", compute, decode)
 
 
 _CACHE: dict[tuple[int, int, tuple[str, ...], float], list[LinkMesh]] = {}

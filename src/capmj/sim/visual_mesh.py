@@ -23,11 +23,13 @@ import os
 import zipfile
 from functools import cache
 from pathlib import Path
+from typing import Callable, Mapping, TypeVar
 
 import mujoco
 import numpy as np
 
 CACHE_ENV = "CAPMJ_CACHE_DIR"
+T = TypeVar("T")
 
 VISUAL_CLUSTER_M = 0.003
 """Grid size (m) of the vertex clustering of the rendered arm meshes."""
@@ -119,27 +121,41 @@ def _light_meshes(xml_path: str) -> dict[str, tuple[list[float], list[int]]]:
     return {name: (v.ravel().tolist(), f.ravel().tolist()) for name, (v, f) in _stored_meshes(xml_path).items()}
 
 
-def _stored_meshes(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The simplified meshes from the disk cache, else computed (and stored there)."""
-    path = cache_dir() / f"ur5e-visual-{_cache_key(xml_path)}.npz"
+def cached_arrays(name: str, compute: Callable[[], dict[str, np.ndarray]],
+                  decode: Callable[[Mapping[str, np.ndarray]], T]) -> T:
+    """``decode`` of the arrays stored as ``name``.npz in :func:`cache_dir`, else of ``compute()``'s,
+    which are stored there first.  A missing or damaged file is recomputed; the file is replaced
+    atomically, so concurrent workers never read half of one; an unwritable cache only costs time."""
+    path = cache_dir() / f"{name}.npz"
     try:
         with np.load(path) as z:
-            names = [str(n) for n in z["names"]]
-            return {n: (z[f"v{k}"], z[f"f{k}"]) for k, n in enumerate(names)}
+            return decode(z)
     except (OSError, KeyError, ValueError, zipfile.BadZipFile):  # missing or damaged: recompute
         pass
-    meshes = _compute(xml_path)
-    arrays: dict[str, np.ndarray] = {"names": np.array(list(meshes))}
-    for k, (v, f) in enumerate(meshes.values()):
-        arrays[f"v{k}"], arrays[f"f{k}"] = v, f
+    arrays = compute()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
         np.savez(tmp, **arrays)  # type: ignore[arg-type]
-        os.replace(tmp, path)  # atomic: concurrent workers never read half a file
+        os.replace(tmp, path)
     except OSError:
         pass
-    return meshes
+    return decode(arrays)
+
+
+def _stored_meshes(xml_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The simplified meshes from the disk cache, else computed (and stored there)."""
+    def compute() -> dict[str, np.ndarray]:
+        meshes = _compute(xml_path)
+        arrays: dict[str, np.ndarray] = {"names": np.array(list(meshes))}
+        for k, (v, f) in enumerate(meshes.values()):
+            arrays[f"v{k}"], arrays[f"f{k}"] = v, f
+        return arrays
+
+    def decode(z: Mapping[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        return {str(n): (z[f"v{k}"], z[f"f{k}"]) for k, n in enumerate(z["names"])}
+
+    return cached_arrays(f"ur5e-visual-{_cache_key(xml_path)}", compute, decode)
 
 
 def use_light_meshes(spec: mujoco.MjSpec, xml_path: str) -> None:
@@ -153,4 +169,5 @@ def use_light_meshes(spec: mujoco.MjSpec, xml_path: str) -> None:
         mesh.userface = face
 
 
-__all__ = ["CACHE_ENV", "VISUAL_CLUSTER_M", "cache_dir", "VISUAL_KEEP_FACES", "cluster", "simplify", "use_light_meshes"]
+__all__ = ["CACHE_ENV", "VISUAL_CLUSTER_M", "VISUAL_KEEP_FACES", "cache_dir", "cached_arrays", "cluster", "simplify",
+           "use_light_meshes"]
