@@ -106,7 +106,9 @@ def one_trial(w: World, prims: Primitives, rng: np.random.Generator) -> tuple[bo
     return ok, err, kind, wall
 
 
-def stack_trial(height: int, rng: np.random.Generator) -> bool:
+def stack_trial(height: int, rng: np.random.Generator) -> str | None:
+    """Build a tower of ``height`` small blocks on a zone; None if it stands, else why not (the
+    failing primitive's status and message, or the stack check's reason)."""
     sp = Spawner(rng)
     zone = sp.zone("gray")
     blocks = [sp.block(COLORS[k % len(COLORS)], "small") for k in range(height)]
@@ -114,10 +116,12 @@ def stack_trial(height: int, rng: np.random.Generator) -> bool:
     prims = Primitives(w)
     for level, b in enumerate(blocks):
         target = (zone.pos[0], zone.pos[1], 0.02 + 0.04 * level)
-        if not prims.pick_and_place(np.asarray(w.pose(b.obj_id).pos), np.array(target), 0.0).ok:
-            return False
+        res = prims.pick_and_place(np.asarray(w.pose(b.obj_id).pos), np.array(target), 0.0)
+        if not res.ok:
+            return f"block {level + 1} from {np.round(res.pick[:2], 3).tolist()}: {res.status} ({res.message})"
     w.settle(1500)
-    return P.is_stack(w.state(), [b.obj_id for b in blocks])[0]
+    ok, why = P.is_stack(w.state(), [b.obj_id for b in blocks])
+    return None if ok else why
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -182,10 +186,11 @@ def main(argv: list[str] | None = None) -> int:
             render_note = f"{label}: {type(exc).__name__}: {exc}"
             rendered[label] = None
 
-    stack = {}
+    stack, stack_failures = {}, []
     for h in range(2, 9) if args.stack_trials > 0 else ():
-        wins = sum(stack_trial(h, rng) for _ in range(args.stack_trials))
-        stack[str(h)] = wins / args.stack_trials
+        whys = [stack_trial(h, rng) for _ in range(args.stack_trials)]
+        stack[str(h)] = whys.count(None) / args.stack_trials
+        stack_failures += [{"height": h, "trial": k, "why": why} for k, why in enumerate(whys) if why is not None]
         print(f"stack height {h}: {stack[str(h)]:.2f}", file=sys.stderr)
 
     err = np.asarray(errors)
@@ -215,6 +220,7 @@ def main(argv: list[str] | None = None) -> int:
             if rendered.get("mesh_arm_rgbd") else None),
         "stack_success_by_height": stack,
         "stack_trials_per_height": args.stack_trials,
+        "stack_failures": stack_failures,
         "failures": failures[:20],
     }
     print(json.dumps(summary))
