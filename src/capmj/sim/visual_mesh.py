@@ -28,6 +28,8 @@ from typing import Callable, Mapping, TypeVar
 import mujoco
 import numpy as np
 
+from capmj.atomic import atomic_write
+
 CACHE_ENV = "CAPMJ_CACHE_DIR"
 T = TypeVar("T")
 
@@ -124,8 +126,9 @@ def _light_meshes(xml_path: str) -> dict[str, tuple[list[float], list[int]]]:
 def cached_arrays(name: str, compute: Callable[[], dict[str, np.ndarray]],
                   decode: Callable[[Mapping[str, np.ndarray]], T]) -> T:
     """``decode`` of the arrays stored as ``name``.npz in :func:`cache_dir`, else of ``compute()``'s,
-    which are stored there first.  A missing or damaged file is recomputed; the file is replaced
-    atomically, so concurrent workers never read half of one; an unwritable cache only costs time."""
+    which are stored there first.  A missing or damaged file is recomputed; the file is written
+    with :func:`capmj.atomic.atomic_write`, so concurrent workers never read half of one; an
+    unwritable cache only costs time."""
     path = cache_dir() / f"{name}.npz"
     try:
         with np.load(path) as z:
@@ -135,9 +138,8 @@ def cached_arrays(name: str, compute: Callable[[], dict[str, np.ndarray]],
     arrays = compute()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, **arrays)  # type: ignore[arg-type]
-        os.replace(tmp, path)
+        with atomic_write(path, "wb") as f:
+            np.savez(f, **arrays)  # type: ignore[arg-type]
     except OSError:
         pass
     return decode(arrays)
