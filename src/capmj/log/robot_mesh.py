@@ -24,7 +24,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from capmj.sim.visual_mesh import cached_arrays, cluster
+from capmj.sim.pose import quat_to_mat
+from capmj.sim.visual_mesh import cached_arrays, simplify
 
 VISUAL_GROUP = 2
 """MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
@@ -33,6 +34,8 @@ CLUSTER_M = 0.006
 KEEP_FACES = 0.08
 """Share of the clustered triangles the quadric decimation aims to keep (it keeps more where the
 mesh has open boundaries)."""
+MIN_FACES = 64
+"""Geoms with at most this many clustered triangles are not decimated."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,15 +49,6 @@ class LinkMesh:
     colors: np.ndarray        # (V, 4) uint8 RGBA
 
 
-def _quat_matrix(q_wxyz: np.ndarray) -> np.ndarray:
-    w, x, y, z = (float(v) for v in q_wxyz)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
-
-
 def _geom_part(model: Any, g: int) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (body frame) and faces of mesh geom ``g``."""
     mid = int(model.geom_dataid[g])
@@ -62,7 +56,7 @@ def _geom_part(model: Any, g: int) -> tuple[np.ndarray, np.ndarray]:
     fa, fn = int(model.mesh_faceadr[mid]), int(model.mesh_facenum[mid])
     v = np.asarray(model.mesh_vert[va:va + vn], dtype=np.float64)
     f = np.asarray(model.mesh_face[fa:fa + fn], dtype=np.int64)
-    v = v @ _quat_matrix(model.geom_quat[g]).T + np.asarray(model.geom_pos[g])
+    v = v @ quat_to_mat(model.geom_quat[g]).T + np.asarray(model.geom_pos[g])
     return v, f
 
 
@@ -97,17 +91,12 @@ def _simplified(parts: list[tuple[str, list[GeomPart]]], cell: float) -> list[Li
         verts, faces, norms, cols = [], [], [], []
         offset = 0
         for v, f, rgba in geoms:
-            tm = trimesh.Trimesh(v, f, process=True)  # welds MuJoCo's per-face vertex copies
-            sv, sf = cluster(np.asarray(tm.vertices), np.asarray(tm.faces), cell)
+            sv, sf = simplify(v, f, cell, KEEP_FACES, min_faces=MIN_FACES)
             if not len(sf):
                 continue
-            part = trimesh.Trimesh(sv, sf, process=False)
-            if len(sf) > 64:
-                part = part.simplify_quadric_decimation(face_count=max(32, int(len(sf) * KEEP_FACES)))
-                sv, sf = np.asarray(part.vertices), np.asarray(part.faces)
             verts.append(sv)
             faces.append(sf + offset)
-            norms.append(np.asarray(part.vertex_normals))
+            norms.append(np.asarray(trimesh.Trimesh(sv, sf, process=False).vertex_normals))
             cols.append(np.tile(rgba, (len(sv), 1)))
             offset += len(sv)
         if not faces:
@@ -137,7 +126,7 @@ def _package_version(name: str) -> str:
 
 def _disk_key(parts: list[tuple[str, list[GeomPart]]], cell: float) -> str:
     """Hash of the simplification's inputs, its parameters and the libraries that compute it."""
-    h = hashlib.sha256(f"{cell}|{KEEP_FACES}|{_package_version('trimesh')}|"
+    h = hashlib.sha256(f"{cell}|{KEEP_FACES}|{MIN_FACES}|{_package_version('trimesh')}|"
                        f"{_package_version('fast-simplification')}|{np.__version__}".encode())
     for name, geoms in parts:
         h.update(f"|{name}:{len(geoms)}".encode())
