@@ -107,15 +107,27 @@ class SuctionIK:
         cost[~ok] = np.inf
         return q[int(np.argmin(cost))]
 
+    def _kinematics(self, q: np.ndarray) -> None:
+        """Forward kinematics of joints ``q`` in the private data (the world is untouched)."""
+        self.data.qpos[self.qadr] = q
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def _jacobian(self) -> np.ndarray:
+        """The tip's 6 x 6 arm Jacobian (linear rows, then angular) after :meth:`_kinematics`."""
+        m, d, jac = self.model, self.data, self._jac
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
+        jac[:3] = self._jacp[:, self.dadr]
+        jac[3:] = self._jacr[:, self.dadr]
+        return jac
+
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:
         """Damped Gauss-Newton steps on the MuJoCo model (removes the analytic model's ~1 mm error)."""
-        m, d, site = self.model, self.data, self.site
+        d, site = self.data, self.site
         quat, e = self._quat, self._e
-        jac = self._jac
         err = np.inf
         for _ in range(6):
-            d.qpos[self.qadr] = q
-            mujoco.mj_kinematics(m, d)
+            self._kinematics(q)
             e[:3] = pos - d.site_xpos[site]
             mujoco.mju_mat2Quat(quat, (rot @ d.site_xmat[site].reshape(3, 3).T).ravel())
             mujoco.mju_quat2Vel(e[3:], quat, 1.0)
@@ -123,10 +135,7 @@ class SuctionIK:
             err = math.sqrt(ex * ex + ey * ey + ez * ez)
             if err < tol and e[3] * e[3] + e[4] * e[4] + e[5] * e[5] < 1e-6:
                 break
-            mujoco.mj_comPos(m, d)
-            mujoco.mj_jacSite(m, d, self._jacp, self._jacr, site)
-            jac[:3] = self._jacp[:, self.dadr]
-            jac[3:] = self._jacr[:, self.dadr]
+            jac = self._jacobian()
             q = q + jac.T @ np.linalg.solve(jac @ jac.T + self._damping, e)
         ok = err < 1e-3 and bool((q >= self.lo).all() and (q <= self.hi).all())
         return IKResult(q if ok else None, err)
@@ -134,22 +143,15 @@ class SuctionIK:
     def joint_rate(self, q: np.ndarray, lin: np.ndarray, yaw_rate: float) -> np.ndarray:
         """Joint velocity moving the tip at linear velocity ``lin`` while it turns about the
         vertical at ``yaw_rate`` (pointing down throughout): ``J(q)^-1 [lin; 0, 0, yaw_rate]``."""
-        m, d, jac = self.model, self.data, self._jac
-        d.qpos[self.qadr] = q
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
-        jac[:3] = self._jacp[:, self.dadr]
-        jac[3:] = self._jacr[:, self.dadr]
+        self._kinematics(q)
         twist = np.array([lin[0], lin[1], lin[2], 0.0, 0.0, yaw_rate])
-        return np.linalg.solve(jac + self._damping, twist)
+        return np.linalg.solve(self._jacobian() + self._damping, twist)
 
     def pose_error(self, q: np.ndarray, pos: np.ndarray, yaw: float) -> tuple[float, float]:
         """(position error m, orientation error rad) of the tip at joints ``q`` against a
         downward-pointing target (private data; the world is untouched)."""
         d = self.data
-        d.qpos[self.qadr] = q
-        mujoco.mj_kinematics(self.model, d)
+        self._kinematics(q)
         x, y, z = d.site_xpos[self.site]
         e_pos = math.sqrt((pos[0] - x) ** 2 + (pos[1] - y) ** 2 + (pos[2] - z) ** 2)
         # angle of the residual rotation R_target R_site^T: its trace = 1 + 2 cos(angle), and the
@@ -160,6 +162,5 @@ class SuctionIK:
 
     def tip_position(self, q: np.ndarray) -> np.ndarray:
         """Forward kinematics of the tip for joints ``q`` (private data; the world is untouched)."""
-        self.data.qpos[self.qadr] = q
-        mujoco.mj_kinematics(self.model, self.data)
+        self._kinematics(q)
         return self.data.site_xpos[self.site].copy()
