@@ -19,9 +19,11 @@ from __future__ import annotations
 import argparse
 import json
 import re
-import warnings
 from pathlib import Path
 from typing import Any
+
+from capmj.bench.results import EPISODES, Key, episode_key, read_results
+from capmj.replay.reader import iter_chunks
 
 ROW_ID = "rerun.controls.RowId"
 VOLATILE_SUMMARY_KEYS = ("written_at", "wall_s")
@@ -53,13 +55,8 @@ def _values(col: Any) -> list[Any]:
 def _rows(path: Path) -> dict[str, list[tuple[Any, ...]]]:
     """Entity path -> its rows, each a tuple of (column, value) without the row id, ordered by
     row id (the order they were logged in)."""
-    from rerun.chunk import RrdReader
-
     out: dict[str, list[tuple[Any, tuple[Any, ...]]]] = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # footer-less files (capmj writes none) warn on open
-        chunks = list(RrdReader(str(path)).stream().to_chunks())
-    for c in chunks:
+    for c in iter_chunks(path):
         ent = c.entity_path
         rb = c.to_record_batch()
         cols = {n: _values(rb.column(n)) for n in rb.schema.names
@@ -86,15 +83,14 @@ def diff_rows(ra: dict[str, list[Any]], rb: dict[str, list[Any]]) -> list[str]:
     return msgs
 
 
-def _results(folder: Path) -> dict[tuple[str, int], str] | None:
-    p = folder / "episodes.jsonl"
+def _results(folder: Path) -> dict[Key, str] | None:
+    p = folder / EPISODES
     if not p.is_file():
         return None
-    out = {}
-    for line in p.read_text().splitlines():
-        r = json.loads(line)
-        r.pop("wall_s", None)
-        out[(r["task"], r["seed"])] = json.dumps(r, sort_keys=True)
+    records, corrupt = read_results(p)
+    out = {episode_key(r): json.dumps({k: v for k, v in r.items() if k != "wall_s"}, sort_keys=True) for r in records}
+    if corrupt:  # unreadable lines count as a difference unless both folders have the same number
+        out[("<corrupt lines>", corrupt, "", None)] = ""
     return out
 
 

@@ -39,7 +39,9 @@ class EpisodeLog:
         return self.logs.get("primitives", [])
 
 
-def _chunks(path: Path) -> Iterator[Any]:
+def iter_chunks(path: Path) -> Iterator[Any]:
+    """The rerun chunks of an ``.rrd`` file in stream order; a missing or unreadable file is a
+    :class:`ReplayError` saying so."""
     if not path.is_file():
         raise ReplayError(f"no such file: {path}")
     import warnings
@@ -77,7 +79,7 @@ def read_episode(path: str | Path) -> EpisodeLog:
     log = EpisodeLog(path, None)
     docs: list[tuple[float, str, str]] = []
     lines: list[tuple[float, str, str]] = []
-    for c in _chunks(path):
+    for c in iter_chunks(path):
         ent = c.entity_path
         log.entities.add(ent)
         log.timelines.update(c.timeline_names)
@@ -125,7 +127,7 @@ def iter_images(path: str | Path) -> Iterator[LoggedImage]:
     """Every camera image logged in the file (``/camera/...``), in file order."""
     import numpy as np
 
-    for c in _chunks(Path(path)):
+    for c in iter_chunks(Path(path)):
         ent = c.entity_path
         if not ent.startswith(CAMERA + "/"):
             continue
@@ -155,4 +157,4 @@ def iter_images(path: str | Path) -> Iterator[LoggedImage]:
                 yield LoggedImage(ent, "depth" if comp == "DepthImage" else kind, prims[i], times[i], arr)
 
 
-__all__ = ["EpisodeLog", "LoggedImage", "ReplayError", "index_values", "iter_images", "read_episode"]
+__all__ = ["EpisodeLog", "LoggedImage", "ReplayError", "index_values", "iter_chunks", "iter_images", "read_episode"]
