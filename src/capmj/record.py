@@ -41,8 +41,8 @@ class ArrayFrames(Protocol):
     """The array form of :meth:`Recorder.frame`, for recorders that offer it (the runner prefers it)."""
 
     def frame_arrays(self, time: float, names: tuple[str, ...], pos: np.ndarray, quat: np.ndarray) -> None:
-        """Poses of the bodies ``names`` at simulated ``time``: ``pos`` (N, 3) and ``quat_wxyz``
-        (N, 4) rows in ``names`` order.  The arrays are the recorder's to keep: the caller passes
+        """Poses of the bodies ``names`` at simulated ``time``: ``pos`` (N, 3) and ``quat``
+        (N, 4, MuJoCo's w, x, y, z) rows in ``names`` order.  The arrays are the recorder's to keep: the caller passes
         fresh copies."""
 
 

@@ -70,8 +70,9 @@ EXECUTE_MAX_STEPS = 20000
 class MotionConfig:
     """Motion tuning of the arm.  ``yaw_path_length`` times the wrist turn (rad) counts as path
     length, so a pure wrist rotation gets time and IK points like a move of that length does; 0.1 m
-    per rad turns the largest placement turn (45°) into ~8 cm.  ``retreat`` is how far the tip rises
-    straight up after letting go (after a place, at most to the transit height), so the cup leaves
+    per rad turns the largest placement turn (45°) into ~8 cm.  ``retreat`` is how far the tip at
+    least rises straight up after letting go (after a place it rises on to the next primitive's
+    transit height, see :meth:`capmj.sim.primitives.Primitives.transit_height`), so the cup leaves
     the released object vertically before the next move goes sideways."""
 
     speed: float = 1.2            # m/s, free-space tip speed
@@ -170,7 +171,7 @@ class Motion:
         fast = length - slow_length
         if slow_length > 0 and (slow_length < slow_speed**2 / (2 * accel) or fast < slow_speed**2 / (2 * accel)):
             speed, slow_length, fast = slow_speed, 0.0, length
-        phases: list[tuple[float, float]] = []  # (duration, acceleration), starting at rest
+        phases: list[tuple[float, float]]  # (duration, acceleration), starting at rest
         if slow_length <= 0:
             peak = min(speed, float(np.sqrt(length * accel)))
             cruise = max(0.0, length - peak * peak / accel)
