@@ -207,25 +207,65 @@ def test_segments_end_on_target_without_a_converge_wait() -> None:
     assert not stopped and extra == 0
 
 
-def test_guarded_descent_profile_brakes_to_the_approach_speed_before_the_slow_part() -> None:
-    """One line, fast then slow: the speed where the slow part begins is the approach speed, the
-    slow part never runs faster, the line ends at rest on its end, and no limit is exceeded."""
-    from capmj.sim.motion import Motion
+def test_time_optimal_timing_is_the_trapezoid_when_the_joints_never_bind() -> None:
+    """A path whose joints move uniformly and far below their limits gets the Cartesian
+    trapezoid: length / speed + speed / acceleration from rest to rest."""
+    from capmj.sim.timing import time_optimal
 
-    length, slow, speed, slow_speed, accel = 0.2, 0.05, 1.2, 0.25, 8.0
-    total, s = Motion._profile(length, speed, accel, slow, slow_speed)
-    t = np.linspace(0.0, total, 20001)
-    x = s(t) * length
-    v = np.gradient(x, t)
-    assert x[0] == 0.0 and x[-1] == pytest.approx(length)
-    assert np.all(np.diff(x) >= -1e-12) and v.max() <= speed + 1e-3
-    assert np.interp(length - slow, x, v) == pytest.approx(slow_speed, abs=2e-3)
-    assert v[x > length - slow + 1e-4].max() <= slow_speed + 2e-3
-    assert np.abs(np.gradient(v, t)[5:-5]).max() <= accel * 1.01
-    # a single-speed line reaches the same end in less time than fast + stop + slow would
-    fast_total, _ = Motion._profile(length - slow, speed, accel)
-    slow_total, _ = Motion._profile(slow, slow_speed, accel)
-    assert total < fast_total + slow_total
+    length, speed, accel = 0.3, 1.2, 8.0
+    s = np.linspace(0.0, 1.0, 301)
+    dq = np.tile([0.5, -0.2, 0.1, 0.0, 0.0, 0.3], (len(s), 1))
+    timing = time_optimal(s, dq, np.full(len(s), speed / length), accel / length, 100.0, 1000.0)
+    assert timing.total == pytest.approx(length / speed + speed / accel, rel=0.01)
+    assert timing.slowdown < 1.0
+    assert timing.at(np.array([0.0, timing.total]))[[0, 1]].tolist() == pytest.approx([0.0, 1.0])
+
+
+def test_time_optimal_timing_slows_only_where_a_joint_would_exceed_its_limits() -> None:
+    """Where a joint's rate dq/ds is high the path slows to keep that joint at its speed limit;
+    elsewhere it runs at the Cartesian cap, so the whole is faster than slowing down uniformly."""
+    from capmj.sim.timing import time_optimal
+
+    s = np.linspace(0.0, 1.0, 401)
+    rate = 1.0 + 4.0 * np.exp(-((s - 0.5) / 0.08) ** 2)          # joint 0 sweeps fast mid-path
+    dq = np.stack([rate] + [np.full(len(s), 0.1)] * 5, axis=1)
+    cap, accel, vmax, amax = np.full(len(s), 2.0), 40.0, 3.0, 30.0
+    timing = time_optimal(s, dq, cap, accel, vmax, amax)
+    t = np.linspace(0.0, timing.total, 20001)
+    a = timing.at(t)
+    sd = np.gradient(a, t)
+    joint_speed = np.interp(a, s, rate) * sd
+    assert joint_speed.max() <= vmax * 1.01
+    assert sd.max() <= 2.0 * 1.01 and np.diff(a).min() >= 0.0
+    assert timing.slowdown == pytest.approx(2.0 / (vmax / rate.max()), rel=1e-3)
+    uniform = time_optimal(s, dq, np.full(len(s), vmax / rate.max()), accel, vmax, amax)
+    assert timing.total < 0.8 * uniform.total
+
+
+def test_guarded_descent_brakes_to_the_approach_speed_where_the_slow_part_begins() -> None:
+    """One line, fast then slow: the tip never runs faster than the approach speed in its last
+    ``slow_last`` metres, runs faster before, and the whole takes less time than a fast line
+    that stops plus a slow line would."""
+    w = World([small(1, "red", 0.5, 0.2)])
+    motion = Primitives(w).motion
+    cfg = motion.cfg
+    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    yaw = motion.commanded_yaw()
+    end, slow = start - np.array([0.0, 0.0, 0.25]), 0.05
+    plan = motion.plan_line(start, end, yaw, yaw, cfg.speed, slow_last=slow)
+    assert plan is not None
+    tips = np.array([motion.ik.tip_position(q) for q in plan.qs])
+    speed = np.linalg.norm(np.diff(tips, axis=0), axis=1) / plan.dt
+    left = np.linalg.norm(tips[1:] - end, axis=1)  # distance to go at each sample's end
+    assert speed[left < slow - 1e-3].max() <= cfg.approach_speed * 1.05
+    assert speed.max() > 2 * cfg.approach_speed
+    np.testing.assert_allclose(tips[-1], end, atol=1e-4)
+    total = (len(plan.qs) - 1) * plan.dt
+    split = end + np.array([0.0, 0.0, slow])
+    fast = motion.plan_line(start, split, yaw, yaw, cfg.speed)
+    assert fast is not None
+    slow_alone = slow / cfg.approach_speed + cfg.approach_speed / cfg.accel  # rest to rest
+    assert total < (len(fast.qs) - 1) * fast.dt + slow_alone
 
 
 def test_ik_seeded_with_a_neighbours_offset_lands_within_tolerance() -> None:
