@@ -23,7 +23,7 @@ Why this shape:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Callable, Literal, Sequence
 
 import mujoco
 import numpy as np
@@ -111,6 +111,7 @@ class MotionConfig:
     track_steps: int = 150        # max extra steps to converge at a segment end
     track_tol: float = 0.002      # m tip error accepted at a segment end
     retreat: float = 0.1          # m the tip rises after a release
+    blend: float = 0.02           # m within which a corner of a multi-line move is rounded
 
 
 @dataclass(frozen=True)
@@ -130,10 +131,14 @@ class PrimitiveResult:
 
 @dataclass(frozen=True)
 class _Plan:
-    """Joint-space samples of one segment, ``dt`` seconds apart, tracked by :meth:`Motion.execute`."""
+    """Joint-space samples of one segment, ``dt`` seconds apart, tracked by :meth:`Motion.execute`;
+    ``a`` is the path parameter (0 to 1) of each sample along a line of effective length ``extent``
+    (None for a joint-space move), so a corner blend knows how far a sample is from the line's ends."""
 
     qs: np.ndarray   # (k, 6) joint samples
     dt: float        # seconds between samples
+    a: np.ndarray | None = None
+    extent: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -246,22 +251,23 @@ class Motion:
         return _Table(np.array(ss), np.array(qs), np.array(ms))
 
     def plan_line(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float, speed: float,
-                  slow_last: float = 0.0) -> _Plan | None:
+                  slow_last: float = 0.0, q_start: np.ndarray | None = None) -> _Plan | None:
         """Joint samples for a straight tip line (yaw interpolated), or None if unreachable; the
         last ``slow_last`` metres no faster than ``approach_speed`` (a guarded descent: fast
         through free space, braking to the approach speed where contact is expected, without
-        stopping in between).  Timed by :func:`capmj.sim.timing.time_optimal`."""
+        stopping in between).  Timed by :func:`capmj.sim.timing.time_optimal`.  ``q_start`` are
+        the joints at ``start`` (default: the commanded ones)."""
         cfg = self.cfg
         length = float(np.linalg.norm(end - start))
         # Treat wrist rotation as extra path length so pure rotations get time too.
         eff = max(length, cfg.yaw_path_length * abs(yaw1 - yaw0))
         slow = eff * min(1.0, slow_last / length) if slow_last > 0 and length > 0 else 0.0
-        q_prev = self.world.data.ctrl[:6].copy()
+        q_prev = self.world.data.ctrl[:6].copy() if q_start is None else q_start
         table = self._line_table(start, end, yaw0, yaw1, q_prev, eff)
         if table is None:
             return None
         if eff < 1e-9:  # a zero-length segment (a float-noise length): hold for one sample
-            return _Plan(table.at(np.array([0.0, 1.0])), cfg.ik_dt)
+            return _Plan(table.at(np.array([0.0, 1.0])), cfg.ik_dt, np.array([0.0, 1.0]), eff)
         grid, split = _timing_grid(eff, slow)
         first = table.derivative(grid)
         cap = np.where(grid >= split, cfg.approach_speed, speed) / eff if slow > 0 else np.full(len(grid), speed / eff)
@@ -285,9 +291,49 @@ class Motion:
             acc = np.diff(vel, axis=0) / dt if len(vel) > 1 else np.zeros((1, 6))
             ratio = max(np.max(np.abs(vel)) / cfg.joint_speed, np.sqrt(np.max(np.abs(acc)) / cfg.joint_accel), 1.0)
             if ratio <= RETIME_RATIO_TOL:
-                return _Plan(arr, dt)
+                return _Plan(arr, dt, a, eff)
             scale *= ratio * RETIME_MARGIN  # the grid let a limit slip between its points
-        return _Plan(arr, dt)
+        return _Plan(arr, dt, a, eff)
+
+    def _reference(self, plan: _Plan, max_steps: int = EXECUTE_MAX_STEPS) -> tuple[np.ndarray, ...]:
+        """The plan at every physics step: joint reference, its velocity and acceleration, and the
+        path parameter (zeros for a joint-space move).  Interpolated from the samples, vectorised."""
+        w = self.world
+        ts = w.model.opt.timestep
+        qs, dt = plan.qs, plan.dt
+        n = len(qs) - 1
+        total_steps = min(int(round(n * dt / ts)), max_steps)
+        if n <= 0 or total_steps <= 0:
+            empty = np.empty((0, 6))
+            return empty, empty, empty, np.empty(0)
+        t = (np.arange(total_steps) + 1) * ts
+        i = np.minimum((t / dt).astype(int), n - 1)
+        a = np.minimum((t - i * dt) / dt, 1.0)[:, None]
+        vel = np.gradient(qs, dt, axis=0) if n > 1 else np.zeros_like(qs)
+        vel[0] = vel[-1] = 0.0  # the profile starts and ends at rest
+        acc = np.diff(vel, axis=0) / dt
+        path = np.zeros(total_steps) if plan.a is None else plan.a[i] + a[:, 0] * (plan.a[i + 1] - plan.a[i])
+        return qs[i] + a * (qs[i + 1] - qs[i]), vel[i] + a * (vel[i + 1] - vel[i]), acc[i], path
+
+    def _track(self, q: np.ndarray, vel: np.ndarray, acc: np.ndarray, stop: Callable[[], bool] | None,
+               stop_from: int = 0) -> tuple[bool, int]:
+        """Step through a reference with feed-forward (see the module docstring); ``stop`` is
+        checked from step ``stop_from`` on.  Returns (stopped_early, steps)."""
+        w = self.world
+        if len(q):
+            full = np.zeros((w.model.nv, w.model.nv))
+            mujoco.mj_fullM(w.model, w.data, full)
+            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]  # the arm's block, coupling included
+            d = w.data  # the load beyond the arm's own gravity compensation: cup, carried object
+            load = (d.qfrc_bias[w.arm_dof] - d.qfrc_gravcomp[w.arm_dof]) / self._kp
+            ctrl = q + self._ff * vel + (acc @ inertia.T) / self._kp + load
+        else:
+            ctrl = np.empty((0, 6))
+        steps, stopped = w.step_controls(ctrl[:stop_from])
+        if not stopped:
+            more, stopped = w.step_controls(ctrl[stop_from:], stop)
+            steps += more
+        return stopped, steps
 
     def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None,
                 max_steps: int = EXECUTE_MAX_STEPS) -> tuple[bool, int]:
@@ -297,33 +343,21 @@ class Motion:
         :meth:`World.step_controls`, so the per-step Python work is one row copy, the physics step
         and the optional stop check.
         """
-        w = self.world
-        ts = w.model.opt.timestep
-        qs, dt = plan.qs, plan.dt
-        n = len(qs) - 1
-        total_steps = min(int(round(n * dt / ts)), max_steps)
-        if n > 0 and total_steps > 0:
-            t = (np.arange(total_steps) + 1) * ts
-            i = np.minimum((t / dt).astype(int), n - 1)
-            a = np.minimum((t - i * dt) / dt, 1.0)[:, None]
-            vel = np.gradient(qs, dt, axis=0) if n > 1 else np.zeros_like(qs)
-            vel[0] = vel[-1] = 0.0  # the profile starts and ends at rest
-            acc = np.diff(vel, axis=0) / dt
-            full = np.zeros((w.model.nv, w.model.nv))
-            mujoco.mj_fullM(w.model, w.data, full)
-            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]  # the arm's block, coupling included
-            d = w.data  # the load beyond the arm's own gravity compensation: cup, carried object
-            load = (d.qfrc_bias[w.arm_dof] - d.qfrc_gravcomp[w.arm_dof]) / self._kp
-            ctrl = qs[i] + a * (qs[i + 1] - qs[i]) + self._ff * (vel[i] + a * (vel[i + 1] - vel[i])) \
-                + (acc[i] @ inertia.T) / self._kp + load
-        else:
-            ctrl = np.empty((0, 6))
-        steps, stopped = w.step_controls(ctrl, stop)
-        if stopped:
-            w.data.ctrl[:6] = w.arm_q()
-            return True, steps
-        w.data.ctrl[:6] = qs[-1]
-        return False, steps
+        q, vel, acc, _ = self._reference(plan, max_steps)
+        stopped, steps = self._track(q, vel, acc, stop)
+        self.world.data.ctrl[:6] = self.world.arm_q() if stopped else plan.qs[-1]
+        return stopped, steps
+
+    def _blend_steps(self, path_a: np.ndarray, extent_a: float, path_b: np.ndarray, extent_b: float) -> int:
+        """Physics steps by which line B may start before line A ends: both within ``blend`` of
+        their shared corner (A's last steps, B's first), so the blended path stays within
+        ``blend`` of the corner wherever it leaves the two lines."""
+        r = self.cfg.blend
+        if r <= 0 or extent_a <= 0 or extent_b <= 0:
+            return 0
+        tail = int(np.count_nonzero((1.0 - path_a) * extent_a <= r))
+        head = int(np.count_nonzero(path_b * extent_b <= r))
+        return min(tail, head, len(path_a) - 1)
 
     def converge(self, target: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[bool, int]:
         """Hold the last reference until the tip is within ``track_tol`` (bounded in steps)."""
@@ -365,19 +399,48 @@ class Motion:
                 stop: Callable[[], bool] | None = None, slow_last: float = 0.0) -> tuple[str, int]:
         """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps).
         The last ``slow_last`` metres run at ``approach_speed`` without stopping first (a guarded
-        descent: fast through free space, slow where contact is expected).
+        descent: fast through free space, slow where contact is expected)."""
+        return self.move_through([(pos, yaw)], speed, stop, slow_last)[:2]
+
+    def move_through(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None,
+                     stop: Callable[[], bool] | None = None, slow_last: float = 0.0) -> tuple[str, int, int]:
+        """Move the tip along straight lines through each ``(pos, yaw)`` in turn, rounding each
+        corner within ``blend`` (the next line starts while the last one brakes, as a UR
+        controller's blend radius does) instead of stopping there.  ``stop`` and ``slow_last``
+        concern the last line only.  Returns (status, steps, index of the line that could not be
+        planned or -1); every line is planned before the arm moves, so "unreachable" moves nothing.
 
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
         """
-        start = self.ik.tip_position(self.world.data.ctrl[:6].copy())
-        yaw0 = self.commanded_yaw()
-        yaw0 = yaw + ((yaw0 - yaw + np.pi) % (2 * np.pi) - np.pi)  # same angle, nearest the goal
-        plan = self.plan_line(start, np.asarray(pos, float), yaw0, yaw, speed or self.cfg.speed, slow_last)
-        if plan is None:
-            return "unreachable", 0
-        stopped, steps = self.execute(plan, stop)
+        q = self.world.data.ctrl[:6].copy()
+        start, yaw_prev = self.ik.tip_position(q), self.commanded_yaw()
+        plans = []
+        for k, (pos, yaw) in enumerate(points):
+            pos = np.asarray(pos, float)
+            yaw0 = yaw + ((yaw_prev - yaw + np.pi) % (2 * np.pi) - np.pi)  # same angle, nearest the goal
+            last = k == len(points) - 1
+            plan = self.plan_line(start, pos, yaw0, yaw, speed or self.cfg.speed, slow_last if last else 0.0, q)
+            if plan is None:
+                return "unreachable", 0, k
+            plans.append(plan)
+            start, q, yaw_prev = pos, plan.qs[-1], yaw
+        ref_q, ref_v, ref_a, path = self._reference(plans[0])
+        stop_from = 0
+        for before, plan in zip(plans, plans[1:]):
+            q_b, v_b, a_b, path_b = self._reference(plan)
+            o = self._blend_steps(path, before.extent, path_b, plan.extent)
+            if o:  # superpose B's first steps on A's last: a rounded corner (velocities add)
+                ref_q[-o:] += q_b[:o] - plan.qs[0]
+                ref_v[-o:] += v_b[:o]
+                ref_a[-o:] += a_b[:o]
+            stop_from = len(ref_q) - o
+            ref_q, ref_v = np.concatenate([ref_q, q_b[o:]]), np.concatenate([ref_v, v_b[o:]])
+            ref_a, path = np.concatenate([ref_a, a_b[o:]]), path_b
+        stopped, steps = self._track(ref_q, ref_v, ref_a, stop, stop_from)
         if stopped:
-            return "stopped", steps
-        stopped, more = self.converge(np.asarray(pos, float), stop)
-        return ("stopped" if stopped else "ok"), steps + more
+            self.world.data.ctrl[:6] = self.world.arm_q()
+            return "stopped", steps, -1
+        self.world.data.ctrl[:6] = plans[-1].qs[-1]
+        stopped, more = self.converge(np.asarray(points[-1][0], float), stop)
+        return ("stopped" if stopped else "ok"), steps + more, -1
