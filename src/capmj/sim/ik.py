@@ -121,6 +121,17 @@ class SuctionIK:
         jac[3:] = self._jacr[:, self.dadr]
         return jac
 
+    def arm_inertia(self, q: np.ndarray) -> np.ndarray:
+        """The arm's 6 x 6 block of the joint-space inertia matrix at joints ``q`` (coupling
+        included), for feed-forward of a motion that starts there (the world is untouched)."""
+        m, d = self.model, self.data
+        self._kinematics(q)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_crb(m, d)
+        full = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, full)
+        return full[self.dadr][:, self.dadr]
+
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:
         """Damped Gauss-Newton steps on the MuJoCo model (removes the analytic model's ~1 mm error)."""
         d, site = self.data, self.site

@@ -315,18 +315,16 @@ class Motion:
         path = np.zeros(total_steps) if plan.a is None else plan.a[i] + a[:, 0] * (plan.a[i + 1] - plan.a[i])
         return qs[i] + a * (qs[i + 1] - qs[i]), vel[i] + a * (vel[i + 1] - vel[i]), acc[i], path
 
-    def _track(self, q: np.ndarray, vel: np.ndarray, acc: np.ndarray, stop: Callable[[], bool] | None,
+    def _track(self, q: np.ndarray, vel: np.ndarray, torque: np.ndarray, stop: Callable[[], bool] | None,
                stop_from: int = 0) -> tuple[bool, int]:
-        """Step through a reference with feed-forward (see the module docstring); ``stop`` is
-        checked from step ``stop_from`` on.  Returns (stopped_early, steps)."""
+        """Step through a reference with feed-forward (see the module docstring; ``torque`` is the
+        inertia term ``M qddot / kp``); ``stop`` is checked from step ``stop_from`` on.  Returns
+        (stopped_early, steps)."""
         w = self.world
         if len(q):
-            full = np.zeros((w.model.nv, w.model.nv))
-            mujoco.mj_fullM(w.model, w.data, full)
-            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]  # the arm's block, coupling included
             d = w.data  # the load beyond the arm's own gravity compensation: cup, carried object
             load = (d.qfrc_bias[w.arm_dof] - d.qfrc_gravcomp[w.arm_dof]) / self._kp
-            ctrl = q + self._ff * vel + (acc @ inertia.T) / self._kp + load
+            ctrl = q + self._ff * vel + torque + load
         else:
             ctrl = np.empty((0, 6))
         steps, stopped = w.step_controls(ctrl[:stop_from])
@@ -334,6 +332,18 @@ class Motion:
             more, stopped = w.step_controls(ctrl[stop_from:], stop)
             steps += more
         return stopped, steps
+
+    def _inertia_term(self, acc: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """``M qddot / kp`` for reference accelerations ``acc``, with the arm's inertia block
+        (coupling included) at joints ``q``, or at the world's current state when None."""
+        w = self.world
+        if q is None:
+            full = np.zeros((w.model.nv, w.model.nv))
+            mujoco.mj_fullM(w.model, w.data, full)
+            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]
+        else:
+            inertia = self.ik.arm_inertia(q)
+        return (acc @ inertia.T) / self._kp
 
     def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None,
                 max_steps: int = EXECUTE_MAX_STEPS) -> tuple[bool, int]:
@@ -344,7 +354,7 @@ class Motion:
         and the optional stop check.
         """
         q, vel, acc, _ = self._reference(plan, max_steps)
-        stopped, steps = self._track(q, vel, acc, stop)
+        stopped, steps = self._track(q, vel, self._inertia_term(acc), stop)
         self.world.data.ctrl[:6] = self.world.arm_q() if stopped else plan.qs[-1]
         return stopped, steps
 
@@ -425,19 +435,23 @@ class Motion:
                 return "unreachable", 0, k
             plans.append(plan)
             start, q, yaw_prev = pos, plan.qs[-1], yaw
-        ref_q, ref_v, ref_a, path = self._reference(plans[0])
+        # Each line's inertia term uses the arm's inertia where that line starts; a blend adds the
+        # two lines' references, velocities and inertia terms over the overlap.
+        ref_q, ref_v, acc, path = self._reference(plans[0])
+        ref_t = self._inertia_term(acc)
         stop_from = 0
         for before, plan in zip(plans, plans[1:]):
             q_b, v_b, a_b, path_b = self._reference(plan)
+            t_b = self._inertia_term(a_b, plan.qs[0])
             o = self._blend_steps(path, before.extent, path_b, plan.extent)
-            if o:  # superpose B's first steps on A's last: a rounded corner (velocities add)
+            if o:
                 ref_q[-o:] += q_b[:o] - plan.qs[0]
                 ref_v[-o:] += v_b[:o]
-                ref_a[-o:] += a_b[:o]
+                ref_t[-o:] += t_b[:o]
             stop_from = len(ref_q) - o
             ref_q, ref_v = np.concatenate([ref_q, q_b[o:]]), np.concatenate([ref_v, v_b[o:]])
-            ref_a, path = np.concatenate([ref_a, a_b[o:]]), path_b
-        stopped, steps = self._track(ref_q, ref_v, ref_a, stop, stop_from)
+            ref_t, path = np.concatenate([ref_t, t_b[o:]]), path_b
+        stopped, steps = self._track(ref_q, ref_v, ref_t, stop, stop_from)
         if stopped:
             self.world.data.ctrl[:6] = self.world.arm_q()
             return "stopped", steps, -1

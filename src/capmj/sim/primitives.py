@@ -2,7 +2,10 @@
 
 Sequence: rise to a transit height that clears every object on the table, move above the pick
 point, descend until the cup touches, grip, lift, transit, descend until the carried object
-touches something, release, retreat, let the objects come to rest.  Nothing is teleported.
+touches something, release, retreat, let the objects come to rest.  Over-and-down and
+lift-carry-and-down are each one :meth:`~capmj.sim.motion.Motion.move_through`, their corners rounded
+within ``MotionConfig.blend``, so the carried object keeps at least ``clearance - blend`` above every
+object.  Nothing is teleported.
 """
 
 from __future__ import annotations
@@ -133,12 +136,13 @@ class Primitives:
                 return result("unreachable", None, "cannot rise to transit height")
         m.unwind_wrist()
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
-        if m.move_to(np.array([pick[0], pick[1], transit]), yaw)[0] == "unreachable":
-            return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
+        over_pick = np.array([pick[0], pick[1], transit])
         surface = self.highest_top_under(pick[:2])
         touching = lambda: w.suction.touching() is not None  # noqa: E731
-        m.move_to(np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw, stop=touching,
-                  slow_last=cfg.approach_gap + cfg.overshoot)
+        status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
+                                        stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
+        if status == "unreachable" and (leg == 0 or m.move_to(over_pick, yaw)[0] == "unreachable"):
+            return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         obj = w.suction.grip()
         if obj is None:
             m.move_to(np.array([pick[0], pick[1], transit]), yaw)
@@ -150,9 +154,7 @@ class Primitives:
         tip = w.tip_pose()[0]
         hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
         transit = self.transit_height(exclude=obj, hang=hang)
-        if m.move_to(np.array([tip[0], tip[1], transit]), yaw)[0] == "unreachable":
-            self._put_back(pick, yaw)
-            return result("unreachable", obj, "cannot lift to transit height")
+        lift = np.array([tip[0], tip[1], transit])
         delta = 0.0 if place_yaw is None else _wrap(place_yaw - obj_pose.yaw, _QUARTER)
         new_yaw = yaw + delta
         offset = np.asarray(obj_pose.pos) - tip  # object centre relative to the tip
@@ -164,14 +166,19 @@ class Primitives:
         else:
             centre_z = self.highest_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
-        if m.move_to(np.array([tip_xy[0], tip_xy[1], transit]), new_yaw)[0] == "unreachable":
-            self._put_back(pick, yaw)
-            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
-
-        # 3. down until the carried object touches, release, retreat, settle
+        over_place = np.array([tip_xy[0], tip_xy[1], transit])
+        # 3. lift, carry and go down until the carried object touches (one move, corners rounded)
         placed = w.suction.held_touches_other
-        m.move_to(np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw, stop=placed,
-                  slow_last=cfg.approach_gap + cfg.overshoot)
+        legs = [(lift, yaw), (over_place, new_yaw), (np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw)]
+        status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot)
+        if status == "unreachable" and leg == 2:  # no descent: carry over the place point and let go there
+            status, _, leg = m.move_through(legs[:2])
+        if status == "unreachable":
+            self._put_back(pick, yaw)
+            if leg == 0:
+                return result("unreachable", obj, "cannot lift to transit height")
+            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
+        # 4. release, retreat, settle
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         # Retreat straight up, on to the height the next primitive starts its transit at: one
