@@ -282,3 +282,36 @@ def test_ik_seeded_with_a_neighbours_offset_lands_within_tolerance() -> None:
     for q in (seeded.q, plain.q):
         np.testing.assert_allclose(ik.tip_position(q), target, atol=1e-4)
     np.testing.assert_allclose(seeded.q, plain.q, atol=1e-3)
+
+
+def test_a_two_line_move_rounds_its_corner_within_the_blend_radius() -> None:
+    """Up then across as one move: the arm does not stop at the corner, so it arrives in fewer
+    steps than two separate moves, and the tip never leaves the two lines by more than the blend
+    radius (plus servo tracking)."""
+    def run(blended: bool) -> tuple[int, list[np.ndarray]]:
+        w = World([small(1, "red", 0.5, 0.2)])
+        motion = Primitives(w).motion
+        tips: list[np.ndarray] = []
+        w.add_frame_listener(lambda world: tips.append(world.tip_pose()[0].copy()), 1)
+        yaw = motion.commanded_yaw()
+        start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+        corner, end = start + np.array([0.0, 0.0, 0.1]), start + np.array([0.0, -0.3, 0.1])
+        if blended:
+            status, steps, _ = motion.move_through([(corner, yaw), (end, yaw)])
+        else:
+            (status, a), (_, b) = motion.move_to(corner, yaw), motion.move_to(end, yaw)
+            steps = a + b
+        assert status == "ok"
+        np.testing.assert_allclose(w.tip_pose()[0], end, atol=motion.cfg.track_tol)
+        return steps, tips
+
+    separate, _ = run(False)
+    steps, tips = run(True)
+    assert steps < separate - 20
+    w = World([small(1, "red", 0.5, 0.2)])
+    start = Primitives(w).motion.ik.tip_position(w.data.ctrl[:6].copy())
+    corner = start + np.array([0.0, 0.0, 0.1])
+    off = [min(np.hypot(p[0] - start[0], p[1] - start[1]),                     # the vertical line
+               np.hypot(p[0] - start[0], p[2] - corner[2])) for p in tips]     # the horizontal one
+    assert max(off) <= Primitives(w).cfg.blend + 2e-3
+    assert max(off) > 2e-3  # it did cut the corner
