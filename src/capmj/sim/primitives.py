@@ -5,7 +5,9 @@ point, descend until the cup touches, grip, lift, transit, descend until the car
 touches something, release, retreat, let the objects come to rest.  Over-and-down and
 lift-carry-and-down are each one :meth:`~capmj.sim.motion.Motion.move_through`, their corners rounded
 within ``MotionConfig.blend``, so the carried object keeps at least ``clearance - blend`` above every
-object.  Nothing is teleported.
+object.  Where the lift to that one transit height is out of reach at the pick point (a far corner,
+a tall tower elsewhere), the carry rises on a slope instead, clearing what it passes over
+(:mod:`capmj.sim.carry`).  Nothing is teleported.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import math
 
 import numpy as np
 
+from capmj.sim.carry import sloped_transit
 from capmj.sim.motion import Motion, MotionConfig, PrimitiveResult
 from capmj.sim.robot import CUP_RADIUS
 from capmj.sim.world import World
@@ -154,7 +157,6 @@ class Primitives:
         tip = w.tip_pose()[0]
         hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
         transit = self.transit_height(exclude=obj, hang=hang)
-        lift = np.array([tip[0], tip[1], transit])
         delta = 0.0 if place_yaw is None else _wrap(place_yaw - obj_pose.yaw, _QUARTER)
         new_yaw = yaw + delta
         offset = np.asarray(obj_pose.pos) - tip  # object centre relative to the tip
@@ -166,16 +168,33 @@ class Primitives:
         else:
             centre_z = self.highest_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
-        over_place = np.array([tip_xy[0], tip_xy[1], transit])
+        down = np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot])
         # 3. lift, carry and go down until the carried object touches (one move, corners rounded)
         placed = w.suction.held_touches_other
-        legs = [(lift, yaw), (over_place, new_yaw), (np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot]), new_yaw)]
+        place_z = transit  # the tip height over the place point, where the retreat rises back to
+        legs = [(np.array([tip[0], tip[1], transit]), yaw), (np.array([tip_xy[0], tip_xy[1], transit]), new_yaw),
+                (down, new_yaw)]
+        lifts = 1  # legs[:lifts] lift the object; then the carry over the place point, then the descent
         status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot)
-        if status == "unreachable" and leg == 2:  # no descent: carry over the place point and let go there
-            status, _, leg = m.move_through(legs[:2])
+        if status == "unreachable" and leg == 0:
+            # Out of reach straight up: only what the carry passes over needs clearing (the carried
+            # object's footprint around the tip), on a slope between the highest reachable heights.
+            lo, hi = w.aabb(obj)
+            radius = float(np.linalg.norm(offset[:2])) + float(np.linalg.norm(hi[:2] - lo[:2])) / 2
+            sloped = sloped_transit(w, m.ik, tip[:2], tip_xy, yaw, radius, transit, cfg.min_transit_z,
+                                    cfg.clearance + hang, obj)
+            if sloped is not None:
+                *via, above = sloped  # up at the pick point, then rising along the way; above the place point
+                place_z = float(above[2])
+                legs = [(point, yaw) for point in via] + [(np.array([tip_xy[0], tip_xy[1], place_z]), new_yaw),
+                                                          (down, new_yaw)]
+                lifts = len(via)
+                status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot)
+        if status == "unreachable" and leg == len(legs) - 1:  # no descent: carry over the place point, let go there
+            status, _, leg = m.move_through(legs[:-1])
         if status == "unreachable":
             self._put_back(pick, yaw)
-            if leg == 0:
+            if leg < lifts:
                 return result("unreachable", obj, "cannot lift to transit height")
             return result("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
         # 4. release, retreat, settle
@@ -184,7 +203,7 @@ class Primitives:
         # Retreat straight up, on to the height the next primitive starts its transit at: one
         # vertical move instead of a retreat that stops and a rise that starts again.
         tip = w.tip_pose()[0]
-        up = min(transit, tip[2] + cfg.retreat)
+        up = min(place_z, tip[2] + cfg.retreat)
         if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), new_yaw)[0] == "unreachable":
             m.move_to(np.array([tip[0], tip[1], up]), new_yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
