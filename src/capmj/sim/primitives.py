@@ -28,7 +28,8 @@ AT_HEIGHT_TOL = 1e-3
 
 YAW_QUARTER_TURNS = range(-4, 5)
 """Quarter turns tried around the current yaw when choosing a pick yaw: up to a full turn either
-way, so every tool yaw equivalent for the round cup within the wrist's reach is a candidate."""
+way, so every tool yaw equivalent for the round cup within the wrist's reach is a candidate (the
+nearest to the current yaw wins a tie)."""
 
 
 def _wrap(a: float, period: float) -> float:
@@ -84,12 +85,19 @@ class Primitives:
         m = self.motion
         base = m.commanded_yaw()
         q_near = self.world.data.ctrl[:6].copy()
+        q = m.ik.solve_analytic(pos, base, q_near)
+        if q is None:
+            return base
+        lo, hi = m.ik.lo[5], m.ik.hi[5]
         best, best_cost = base, (np.inf, 0)
-        for k in YAW_QUARTER_TURNS:  # analytic solutions suffice: candidates' wrist angles differ by ~pi/2
-            yaw = base + k * _QUARTER
-            q = m.ik.solve_analytic(pos, yaw, q_near)
-            if q is not None and (abs(q[5]), abs(k)) < best_cost:
-                best, best_cost = yaw, (abs(q[5]), abs(k))
+        for k in YAW_QUARTER_TURNS:
+            # Turning the tool's yaw by k quarter turns turns wrist 3 the other way and leaves the
+            # other joints as they are: one analytic solve serves every candidate.  Wrist 3 is
+            # taken, as the solver does, within half a turn of its current angle.
+            q5 = (q[5] - k * _QUARTER - q_near[5] + math.pi) % (2 * math.pi) + q_near[5] - math.pi
+            cost = (round(abs(q5), 9), abs(k))  # rounded: candidates a full turn apart tie exactly
+            if lo <= q5 <= hi and cost < best_cost:
+                best, best_cost = base + k * _QUARTER, cost
         return best
 
     def _put_back(self, pick: np.ndarray, yaw: float) -> None:
