@@ -315,3 +315,25 @@ def test_a_two_line_move_rounds_its_corner_within_the_blend_radius() -> None:
                np.hypot(p[0] - start[0], p[2] - corner[2])) for p in tips]     # the horizontal one
     assert max(off) <= Primitives(w).cfg.blend + 2e-3
     assert max(off) > 2e-3  # it did cut the corner
+
+
+def test_object_boxes_bound_every_geom_of_each_object_tightly() -> None:
+    """All objects' boxes at once, a bowl's many geoms included: each box holds every corner of
+    its object's geoms' own (rotated) boxes and touches the extreme ones."""
+    import itertools
+
+    w = World([small(1, "red", 0.5, 0.0, yaw=0.4), ObjectSpec(2, "bowl", "blue", (0.45, 0.25, BOWL_HEIGHT / 2))])
+    w.settle()
+    ids, lo, hi = w.object_boxes()
+    assert ids.tolist() == [1, 2]
+    m, d = w.model, w.data
+    for k, obj in enumerate(ids):
+        corners = []
+        for g in np.flatnonzero(w.geom_obj == obj):
+            rot = d.geom_xmat[g].reshape(3, 3)
+            centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:]
+            corners += [d.geom_xpos[g] + rot @ (centre + np.array(s) * half) for s in itertools.product((-1, 1), repeat=3)]
+        pts = np.array(corners)
+        np.testing.assert_allclose(pts.min(axis=0), lo[k], atol=1e-12)
+        np.testing.assert_allclose(pts.max(axis=0), hi[k], atol=1e-12)
+    assert np.array_equal(w.aabb(2)[1], hi[1]) and w.top_z(1) == hi[0, 2]

@@ -56,19 +56,15 @@ class Primitives:
         comes to rest on (a bowl's floor, never a zone): that is the planner API's
         :meth:`capmj.agents.footprints.Footprints.support_z`, on exact footprints.
         """
-        z = 0.0
-        for i in self.world.objects_by_id:
-            if i == exclude:
-                continue
-            lo, hi = self.world.aabb(i)
-            if lo[0] - radius <= xy[0] <= hi[0] + radius and lo[1] - radius <= xy[1] <= hi[1] + radius:
-                z = max(z, float(hi[2]))
-        return z
+        ids, lo, hi = self.world.object_boxes()
+        under = (ids != exclude) & (lo[:, 0] - radius <= xy[0]) & (xy[0] <= hi[:, 0] + radius) \
+            & (lo[:, 1] - radius <= xy[1]) & (xy[1] <= hi[:, 1] + radius)
+        return float(hi[under, 2].max(initial=0.0))
 
     def highest_top(self, exclude: int | None = None) -> float:
         """Highest object top (m) on the whole table (0 for the bare table): transit clears it."""
-        tops = [self.world.top_z(i) for i in self.world.objects_by_id if i != exclude]
-        return max(tops, default=0.0)
+        ids, _, hi = self.world.object_boxes()
+        return float(hi[ids != exclude, 2].max(initial=0.0))
 
     def transit_height(self, exclude: int | None = None, hang: float = 0.0) -> float:
         """Tip height (m) for moving sideways: ``clearance`` above every object's top (but
