@@ -68,6 +68,36 @@ def test_suction_holds_through_fast_transit() -> None:
     assert P.is_stack(w.state(), [2, 1])[0]
 
 
+def test_held_object_and_cup_do_not_collide_but_both_collide_with_the_rest() -> None:
+    """While the weld holds a block, the cup–block contact is filtered out (the weld fixes their
+    pose); the block still lands on the table, the filter ends with the release, and restoring a
+    snapshot taken mid-carry brings the filter back with the weld."""
+    from capmj.sim.suction import CUP
+
+    w = World([small(1, "red", 0.5, 0.0), small(2, "blue", 0.4, -0.2)])
+    p = Primitives(w)
+    seen: list[set[int]] = []
+    snaps = []
+
+    def watch(world: World) -> None:
+        if world.suction.held == 1:
+            seen.append(world.contacts_of(1))
+            if not snaps:
+                snaps.append(world.snapshot())
+
+    w.add_frame_listener(watch, 5)
+    res = p.pick_and_place(np.array(w.pose(1).pos), np.array([0.55, 0.25]))
+    assert res.ok and len(seen) > 20
+    assert all(CUP not in owners for owners in seen)
+    assert any(0 in owners for owners in seen)  # it touched the table while still held: the place
+    affinity = w.model.geom_conaffinity.copy()
+    assert affinity[w.cup_geom] != 0  # released: the cup collides as compiled
+    w.restore(snaps[0])
+    assert w.suction.held == 1 and w.model.geom_conaffinity[w.cup_geom] == 0
+    w.suction.release()
+    assert np.array_equal(w.model.geom_conaffinity, affinity)
+
+
 def test_block_placed_on_block_rests_on_it() -> None:
     w = World([small(1, "red", 0.45, 0.1), small(2, "blue", 0.6, -0.15)])
     res = Primitives(w).pick_and_place(np.array(w.pose(1).pos), np.array(w.pose(2).pos[:2]))

@@ -33,7 +33,14 @@ def contact_owners(data: mujoco.MjData, geom_obj: np.ndarray, cup_geom: int, obj
 
 class Suction:
     """The suction cup of one world.  It holds no state of its own: what is held is read from the
-    active welds, so restoring a physics snapshot restores the grip too.
+    active welds, so restoring a physics snapshot restores the grip too (call :meth:`sync` after
+    one: the held object's collision filter follows the weld).
+
+    While an object is held, it and the cup do not collide: the weld already fixes their relative
+    pose, and the cup–object contact only added constraint rows (a cylinder–box pair, ~4 contact
+    points) that made each step of a carry cost 2.5 times a step with nothing held (measured:
+    33 against 13 µs).  Both keep colliding with everything else (table, objects, arm), so a
+    carried object still lands on what is under it and the cup can still strike another object.
 
     ``geom_obj`` maps every geom to its object id (0 for robot, table, floor), ``body_of`` and
     ``weld_of`` map movable object ids to their body and weld equality.
@@ -45,6 +52,10 @@ class Suction:
         self._suction_body, self._cup = suction_body, cup_geom
         self._geom_obj, self._body_of, self._weld_of = geom_obj, body_of, weld_of
         self._movable = frozenset(weld_of)
+        self._affinity = model.geom_conaffinity.copy()  # as compiled: restored on release
+        self._body_affinity = model.body_conaffinity.copy()
+        self._cup_body = int(model.geom_bodyid[cup_geom])
+        self._geoms_of = {i: np.flatnonzero(geom_obj == i) for i in weld_of}
         self._geom_obj_list: list[int] = [int(o) for o in geom_obj]
         self._welds = list(weld_of.items())
 
@@ -95,6 +106,7 @@ class Suction:
         m.eq_data[eq, 3:6] = r1.T @ (d.xpos[b2] - d.xpos[b1])
         m.eq_data[eq, 6:10] = relq
         d.eq_active[eq] = 1
+        self.sync()
         return obj
 
     def release(self) -> int | None:
@@ -102,7 +114,20 @@ class Suction:
         obj = self.held
         if obj is not None:
             self.data.eq_active[self._weld_of[obj]] = 0
+            self.sync()
         return obj
+
+    def sync(self) -> None:
+        """Set the collision filter from the active weld: the held object and the cup lose their
+        affinity bits (so neither accepts the other's type) while everything else keeps its own."""
+        m, held = self.model, self.held
+        m.geom_conaffinity[:] = self._affinity
+        m.body_conaffinity[:] = self._body_affinity
+        if held is not None:
+            for g in (self._cup, *self._geoms_of[held]):
+                m.geom_conaffinity[g] = 0
+            for b in (self._cup_body, self._body_of[held]):
+                m.body_conaffinity[b] = int(np.bitwise_or.reduce(m.geom_conaffinity[m.geom_bodyid == b]))
 
     def held_touches_other(self) -> bool:
         """True when the held object touches anything but the cup (placing is detected this way).

@@ -213,4 +213,5 @@ class World:
         self.model.eq_data[:] = snap.eq_data
         self.steps = snap.steps
         self._schedule()
+        self.suction.sync()
         mujoco.mj_forward(self.model, self.data)
