@@ -2,15 +2,18 @@
 Ravens pick-and-place primitive built from them.
 
 Why this shape:
-- Segments are straight lines of the suction tip.  The line is solved through :class:`SuctionIK` once, at path points chosen so that cubic Hermite
-  interpolation in joint space between neighbours (with the joint rates from the Jacobian) keeps
-  the tip within ``path_tol`` of the line (checked by forward kinematics at every interval's
-  midpoint, where the interpolation error of a smooth path peaks).  The line is then timed, without
-  solving it again, as fast as the tool's speed and acceleration caps and the joints' limits allow
-  at each point (:func:`capmj.sim.timing.time_optimal`), and sampled every ``ik_dt`` seconds from
-  that table.  Solving every time sample instead (the
-  first version) took ~220 IK solves per pick-and-place, more wall time than the physics; linear
-  interpolation needed ~45; the Hermite table needs ~8.
+- Segments are straight lines of the suction tip.  The line is solved through :class:`SuctionIK`
+  once, at path points chosen so that cubic Hermite interpolation in joint space between
+  neighbours (with the joint rates from the Jacobian) keeps the tip within ``path_tol`` of the
+  line (checked by forward kinematics at every interval's midpoint, where the interpolation error
+  of a smooth path peaks).  The line is then timed, without solving it again, as fast as the
+  tool's speed and acceleration caps and the joints' limits allow at each point
+  (:func:`capmj.sim.timing.time_optimal`), and sampled every ``ik_dt`` seconds from that table.
+  Solving every time sample instead (the first version) took ~220 IK solves per pick-and-place,
+  more wall time than the physics; linear interpolation needed ~45; the Hermite table needs ~8.
+- A move through several lines (:meth:`Motion.move_through`) plans them all before the arm moves
+  and rounds each corner within ``blend``: the next line's reference is added to the last one's
+  while it brakes, so the arm does not stop at the corner.
 - The Menagerie servos are ``kp (ctrl - q) - kv qdot``: without feed-forward they lag a moving
   reference by ``kv/kp = 0.2 s``.  We send ``q_ref + (kv/kp) qdot_ref + (M qddot_ref + b) / kp``:
   the velocity term cancels that lag, the inertia term (the arm's mass-matrix block) the
