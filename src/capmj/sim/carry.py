@@ -37,10 +37,10 @@ def corridor(world: World, a: np.ndarray, b: np.ndarray, radius: float,
     """
     out = []
     d = np.asarray(b, float)[:2] - np.asarray(a, float)[:2]
-    for i in world.objects_by_id:
+    ids, los, his = world.object_boxes()
+    for i, lo, hi in zip(ids.tolist(), los, his):
         if i == exclude:
             continue
-        lo, hi = world.aabb(i)
         s0, s1 = 0.0, 1.0
         for k in range(2):
             lo_k, hi_k = lo[k] - radius, hi[k] + radius

@@ -25,6 +25,14 @@ def tool_rotation(yaw: float) -> np.ndarray:
     return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
 
 
+def arm_inertia_block(model: mujoco.MjModel, data: mujoco.MjData, dofs: slice | np.ndarray) -> np.ndarray:
+    """The arm's block of the joint-space inertia matrix (coupling included) from ``data``'s
+    composite inertias (after ``mj_crb``, as any step leaves them)."""
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    return full[dofs][:, dofs]
+
+
 def _as_index(idx: np.ndarray) -> slice | np.ndarray:
     """A slice when the addresses are consecutive (the arm's always are): indexing with it takes a
     view instead of a fancy-indexed copy, a few microseconds per IK iteration."""
@@ -128,9 +136,7 @@ class SuctionIK:
         self._kinematics(q)
         mujoco.mj_comPos(m, d)
         mujoco.mj_crb(m, d)
-        full = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, full)
-        return full[self.dadr][:, self.dadr]
+        return arm_inertia_block(m, d, self.dadr)
 
     def _refine(self, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, tol: float) -> IKResult:
         """Damped Gauss-Newton steps on the MuJoCo model (removes the analytic model's ~1 mm error)."""

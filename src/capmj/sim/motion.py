@@ -28,10 +28,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Literal, Sequence
 
-import mujoco
 import numpy as np
 
-from capmj.sim.ik import SuctionIK
+from capmj.sim.ik import SuctionIK, arm_inertia_block
 from capmj.sim.timing import time_optimal
 from capmj.sim.world import World
 
@@ -340,12 +339,7 @@ class Motion:
         """``M qddot / kp`` for reference accelerations ``acc``, with the arm's inertia block
         (coupling included) at joints ``q``, or at the world's current state when None."""
         w = self.world
-        if q is None:
-            full = np.zeros((w.model.nv, w.model.nv))
-            mujoco.mj_fullM(w.model, w.data, full)
-            inertia = full[np.ix_(w.arm_dof, w.arm_dof)]
-        else:
-            inertia = self.ik.arm_inertia(q)
+        inertia = arm_inertia_block(w.model, w.data, w.arm_dof) if q is None else self.ik.arm_inertia(q)
         return (acc @ inertia.T) / self._kp
 
     def execute(self, plan: _Plan, stop: Callable[[], bool] | None = None,

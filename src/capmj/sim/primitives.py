@@ -152,7 +152,7 @@ class Primitives:
             return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         obj = w.suction.grip()
         if obj is None:
-            m.move_to(np.array([pick[0], pick[1], transit]), yaw)
+            m.move_to(over_pick, yaw)
             return result("no_grip", None, "descended to the pick point without touching a movable object")
         w.step(cfg.grip_dwell_steps)
 
