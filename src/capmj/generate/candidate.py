@@ -29,7 +29,8 @@ from capmj.generate.config import GENERATED_TAG, NAME_RE, GenerateConfig
 from capmj.generate.conversation import Conversation
 from capmj.generate.isolate import run_isolated
 from capmj.generate.library import LibraryTask, api_reference, similar
-from capmj.generate.static import ALLOWED_IMPORTS, extract_code, extract_json, static_checks
+from capmj.confine.allowlist import allowed_imports_text
+from capmj.generate.static import extract_code, extract_json, static_checks
 from capmj.llm import LLMClient
 from capmj.sim.objects import BLOCK_SIZES, KINDS
 from capmj.sim.palette import COOL, WARM
@@ -107,7 +108,7 @@ def _propose(ctx: Context, conv: Conversation, rec: CandidateRecord) -> dict[str
 def _pick_examples(ctx: Context, conv: Conversation, prop: dict[str, Any]) -> list[str]:
     text = prompts.render(
         "task_api.txt", name=prop["name"], goal=prop["goal"], objects=json.dumps(prop.get("objects", [])),
-        why=prop.get("why", ""), allowed_imports=", ".join(ALLOWED_IMPORTS), api=api_reference(),
+        why=prop.get("why", ""), allowed_imports=allowed_imports_text(), api=api_reference(),
         library=_library_lines(ctx.library, summary=True))
     answer = conv.ask(text, "generate.pick_examples")
     known = {t.name for t in ctx.library}

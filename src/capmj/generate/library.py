@@ -9,11 +9,13 @@ The task API reference shown to the LLM is built from the live signatures and do
 
 from __future__ import annotations
 
+import importlib
 import inspect
 import sys
 from dataclasses import dataclass
 from types import ModuleType
 
+from capmj.confine.allowlist import CAPMJ_API, ordered_members
 from capmj.errors import CapmjError
 from capmj.tasks import registry
 
@@ -77,26 +79,27 @@ def _members(module: ModuleType, names: tuple[str, ...]) -> list[str]:
     return lines
 
 
-def api_reference() -> str:
-    """Signatures and first docstring paragraphs of what a generated task may use."""
-    from capmj.sim import objects, state
-    from capmj.tasks import predicates, protocol, spawn
+_NOTES = {
+    "capmj.tasks.spawn": "Spawner methods: block(color, size='small', region=None, avoid=(), yaw=None), zone(color, "
+                         "scale=1.0, ...), bowl(color, ...); .objects is the tuple of placed ObjectSpec (ids 1, 2, ... in "
+                         "creation order).",
+    "capmj.sim.state": "SceneState methods: spec(obj_id) -> ObjectSpec, pos(obj_id) -> np.ndarray, of_kind(kind), "
+                       "poses[obj_id].yaw / .tilt; SceneState.from_specs(objects) is the spawn state.",
+    "capmj.sim.objects": "ObjectSpec attributes: obj_id, kind, color, pos (centre), yaw, size (blocks), scale (zones), "
+                         "height, footprint_radius, fixed.",
+}
+"""What a signature cannot show: the methods and attributes of the main objects."""
 
-    parts = [
-        _members(protocol, ("Scene", "Target", "OracleGoal", "Verdict", "Resample")),
-        _members(spawn, ("Spawner", "pick_colors", "pick_color", "DEFAULT_COLORS", "WARM_COLORS", "COOL_COLORS")),
-        ["Spawner methods: block(color, size='small', region=None, avoid=(), yaw=None), zone(color, scale=1.0, ...), "
-         "bowl(color, ...); .objects is the tuple of placed ObjectSpec (ids 1, 2, ... in creation order)."],
-        _members(predicates, tuple(n for n in predicates.__all__)),
-        _members(state, ("Pose", "SceneState")),
-        ["SceneState methods: spec(obj_id) -> ObjectSpec, pos(obj_id) -> np.ndarray, of_kind(kind), "
-         "poses[obj_id].yaw / .tilt; SceneState.from_specs(objects) is the spawn state."],
-        _members(objects, ("ObjectSpec", "BLOCK_SIZES", "ZONE_SIZE", "BOWL_HEIGHT", "BOWL_FLOOR", "BOWL_INNER_RADIUS",
-                           "KINDS", "FIXED_KINDS")),
-        ["ObjectSpec attributes: obj_id, kind, color, pos (centre), yaw, size (blocks), scale (zones), height, "
-         "footprint_radius, fixed."],
-    ]
-    return "\n".join(line for part in parts for line in part)
+
+def api_reference() -> str:
+    """Signatures and first docstring paragraphs of capmj's task API: exactly the names the
+    static check allows (:data:`capmj.confine.allowlist.CAPMJ_API`), in that order."""
+    lines = []
+    for name in CAPMJ_API:
+        lines += _members(importlib.import_module(name), ordered_members(name))
+        if name in _NOTES:
+            lines.append(_NOTES[name])
+    return "\n".join(lines)
 
 
 __all__ = ["LibraryTask", "api_reference", "load_library", "similar"]

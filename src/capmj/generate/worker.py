@@ -1,11 +1,17 @@
 """The worker process that executes generated task code (never the generator's own process).
 
-``python -m capmj.generate.worker FILE --name NAME --seeds 0,1,2 --accept-rate R --tag T --events OUT``
+``python -m capmj.generate.worker FILE --name NAME --seeds 0,1,2 --accept-rate R --tag T --events-fd N``
 imports FILE, takes its ``TASK`` and runs the public task checker on it
 (:func:`capmj.taskcheck.check_task`, the same code plugin authors run).  Every check's start and
-result is appended to OUT as one JSON line and flushed at once, so when the parent kills this
-process for exceeding a resource limit the record still names the check that was running.
-Events go to a file, not stdout, so whatever the task prints cannot corrupt them.
+result is written to the events stream (a file descriptor the parent opened) as one JSON line and
+flushed at once, so when the parent kills this process for exceeding a resource limit the record
+still names the check that was running.  Events go to their own descriptor, not stdout, so
+whatever the task prints cannot corrupt them.
+
+Before it loads the candidate the worker imports everything the checker uses and builds one empty
+world (trusted work: the robot's mesh cache is read or computed now), then installs the runtime
+guard (:mod:`capmj.confine.guard`): from then on a process, a write, a socket, native code or a
+foreign import ends the process with the event recorded.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -44,6 +51,15 @@ def _tb_tail(limit: int = 1500) -> str:
     return text if len(text) <= limit else "..." + text[-limit:]
 
 
+def _warm_up() -> None:
+    """Trusted work done before the guard: the checker's imports and one world build."""
+    import capmj.agents.oracle  # noqa: F401 - imported by the oracle checks
+    import capmj.runner  # noqa: F401 - imported by the episode checks
+    from capmj.sim.world import World
+
+    World(())
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m capmj.generate.worker")
     ap.add_argument("file", type=Path)
@@ -51,22 +67,34 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", required=True, help="comma-separated distinct seeds")
     ap.add_argument("--accept-rate", type=float, required=True)
     ap.add_argument("--tag", action="append", default=[])
-    ap.add_argument("--events", type=Path, required=True)
+    ap.add_argument("--events-fd", type=int, required=True, help="an open descriptor to write events to")
+    ap.add_argument("--unguarded", action="store_true",
+                    help="no runtime guard: only for measuring its cost (benchmarks/confinement.py)")
     args = ap.parse_args(argv)
+    from capmj.confine import guard
     from capmj.taskcheck import CheckConfig, CheckResult, check_task
 
-    with open(args.events, "a", encoding="utf-8") as out:
+    with os.fdopen(args.events_fd, "a", encoding="utf-8") as out:
         _emit(out, {"start": LOAD})
+        _warm_up()
+        g = None if args.unguarded else guard.install(args.file.resolve(), out)
+
+        def start(check: str) -> None:
+            if g is not None:
+                g.check = check
+            _emit(out, {"start": check})
+
+        if g is not None:
+            g.check = LOAD
         try:
-            task = _load(args.file)
+            task = _load(args.file.resolve())
         except BaseException as e:  # noqa: BLE001 - anything the module does at import is the finding
             detail = f"{type(e).__name__}: {e}"
             _emit(out, {"result": CheckResult(LOAD, "error", detail[:500], data={"traceback": _tb_tail()}).to_dict()})
             return 0
         _emit(out, {"result": CheckResult(LOAD, "pass", "module imported, TASK found").to_dict()})
         cfg = CheckConfig(tuple(int(s) for s in args.seeds.split(",")), args.accept_rate, args.name, frozenset(args.tag))
-        check_task(task, cfg, on_start=lambda c: _emit(out, {"start": c}),
-                   on_result=lambda r: _emit(out, {"result": r.to_dict()}))
+        check_task(task, cfg, on_start=start, on_result=lambda r: _emit(out, {"result": r.to_dict()}))
     return 0
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 import copy
 
+from capmj.confine.names import FORBIDDEN_ATTRIBUTES
 from capmj.errors import PlanError
 
 FORBIDDEN_NAMES = frozenset({
@@ -24,13 +25,6 @@ FORBIDDEN_NAMES = frozenset({
 })
 """Rejected wherever the code reads them without binding them itself (none is a builtin here)."""
 
-FORBIDDEN_ATTRIBUTES = frozenset({
-    "tofile", "dump", "dumps", "ctypes", "load", "loads", "save", "savez", "savez_compressed",
-    "savetxt", "loadtxt", "genfromtxt", "fromfile", "memmap", "gi_frame", "gi_code", "ag_frame",
-    "cr_frame", "f_globals", "f_locals", "f_builtins", "f_back", "f_code", "f_trace",
-    "tb_frame", "tb_next", "mro",
-})
-"""Rejected on any object: file I/O, pickling, raw memory and frame access."""
 
 _ALLOWED_NODES: tuple[type[ast.AST], ...] = (
     ast.Module, ast.Expr, ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For, ast.While, ast.If,
