@@ -32,6 +32,11 @@ class PluginError(TaskError):
     """A task plugin failed to load or clashes with another one; names the distribution."""
 
 
+class ConfinementError(PluginError):
+    """LLM-written task code is not confined: refused by the static check or the runtime guard,
+    or changed since it was accepted.  Such code is never imported."""
+
+
 class AgentError(CapmjError):
     """An agent could not act (e.g. the oracle found no valid target)."""
 

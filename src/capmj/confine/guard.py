@@ -28,7 +28,7 @@ import os
 import sys
 from importlib.abc import MetaPathFinder
 from pathlib import Path
-from typing import IO, Any, Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from capmj.confine.allowlist import IMPORTABLE
 
@@ -117,11 +117,17 @@ class _Finder(MetaPathFinder):
         return self.guard.find_spec(fullname, path, target)
 
 
-def install(candidate: Path, events: IO[str]) -> Guard:
-    """Install the guard for the rest of the process (an audit hook cannot be removed)."""
+def install(candidate: Path, events_fd: int) -> Guard:
+    """Install the guard for the rest of the process (an audit hook cannot be removed).
+
+    It reports on its own duplicate of ``events_fd``, written with ``os.write``: a refusal at
+    interpreter exit (an ``atexit`` handler, a thread) still gets recorded after the worker has
+    closed its events file.
+    """
+    fd = os.dup(events_fd)
+
     def report(event: dict[str, Any]) -> None:
-        events.write(json.dumps(event) + "\n")
-        events.flush()
+        os.write(fd, (json.dumps(event) + "\n").encode())
 
     guard = Guard(candidate, report)
     sys.addaudithook(guard)

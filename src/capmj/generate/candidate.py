@@ -17,6 +17,7 @@ Stages (the record's ``stage`` is the last one reached; ``accepted`` only after 
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from dataclasses import dataclass, field
@@ -61,6 +62,8 @@ class CandidateRecord:
     code_path: str | None = None
     conversation: str | None = None
     goals: list[str] = field(default_factory=list)
+    confinement: dict[str, Any] = field(default_factory=dict)
+    """How the accepted attempt was confined: the static check, the guard, the OS layer, the sha256."""
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -155,6 +158,10 @@ def _checked(ctx: Context, conv: Conversation, rec: CandidateRecord, code: str) 
             rec.wall_s["checks"] = rec.wall_s.get("checks", 0.0) + run.wall_s
             for r in run.results:
                 rec.check("static" if r.name in STATIC_IN_WORKER else "runtime", attempt, r)
+            if run.violation is not None:  # reached for the OS: hostile or careless, no second try
+                rec.stage = "static" if run.violation.get("check") in STATIC_IN_WORKER else "runtime"
+                rec.reason = f"{run.ended} (during {run.violation.get('check')})"
+                return None
             bad = _failure([r for r in run.results if r.name in STATIC_IN_WORKER])
         if bad is not None:
             if attempt == 2:
@@ -174,6 +181,8 @@ def _checked(ctx: Context, conv: Conversation, rec: CandidateRecord, code: str) 
         if bad is not None:
             rec.reason = f"runtime check {bad.name}: {bad.detail}"
             return None
+        rec.confinement = {"static": [r.name for r in static], "guard": "audit hook, no event refused",
+                           "os_layer": run.os_layer, "sha256": hashlib.sha256(code.encode()).hexdigest()}
         return attempt
     return None  # pragma: no cover - the loop always returns
 

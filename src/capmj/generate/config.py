@@ -12,12 +12,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
+from capmj.confine.manifest import GENERATED_TAG
 from capmj.errors import ConfigError
 from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
 
 MODES = ("bottom-up", "top-down")
-GENERATED_TAG = "generated-by-llm"
-"""Tag every generated task must carry (select them all with ``--tasks generated-by-llm``)."""
 NAME_RE = re.compile(r"^[a-z][a-z0-9]*(-[a-z0-9]+)+$")
 _PACKAGE_RE = re.compile(r"^[a-z][a-z0-9]*([-_][a-z0-9]+)*$")
 

@@ -23,6 +23,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from capmj.confine.guard import VIOLATION_EXIT
 from capmj.confine.oslayer import confine_child
 from capmj.generate.config import Limits
 from capmj.generate.worker import LOAD
@@ -129,6 +130,8 @@ def _collect(lines: list[str], returncode: int | None, timed_out: bool, err: byt
         elif "result" in ev:
             results.append(CheckResult.from_dict(ev["result"]))
             running = None
+    if violation is None and returncode == VIOLATION_EXIT:
+        violation = {"event": "?", "detail": "an event (not recorded: the events stream was gone)", "check": running or ""}
     if violation is not None:  # whatever the results say, a refused event fails the candidate
         results = [r for r in results if r.name != violation.get("check")]
     done = {r.name for r in results}

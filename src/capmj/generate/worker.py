@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     with os.fdopen(args.events_fd, "a", encoding="utf-8") as out:
         _emit(out, {"start": LOAD})
         _warm_up()
-        g = None if args.unguarded else guard.install(args.file.resolve(), out)
+        g = None if args.unguarded else guard.install(args.file.resolve(), args.events_fd)
 
         def start(check: str) -> None:
             if g is not None:

@@ -1,7 +1,7 @@
 """python -m capmj.tasks check NAME... [--seeds K] [--accept-rate R] [--json]
 
 Loads each named task through the registry (names, tags or ``all``), checks it and prints one
-report per task; exit code 0 when every task passes, 1 when one fails, 2 for bad input.
+report per task (an LLM-written task is first re-checked for confinement, before it is imported); exit code 0 when every task passes, 1 when one fails, 2 for bad input.
 """
 
 from __future__ import annotations
@@ -34,6 +34,17 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _confinement(name: str) -> CheckResult | None:
+    """For an LLM-written task, the re-run of its static check and sha256 before anything of it is
+    imported (:func:`capmj.confine.manifest.verify`); ``None`` for any other task."""
+    problems = registry.confinement(name)
+    if problems is None:
+        return None
+    if problems:
+        return CheckResult("confinement", "fail", "not imported: " + "; ".join(problems[:5]))
+    return CheckResult("confinement", "pass", "every module unchanged since acceptance and passes the static check")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = _parser()
     args = ap.parse_args(argv)
@@ -45,10 +56,16 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     ok = True
     for name in names:
-        try:
-            report = check_task(registry.get_task(name), CheckConfig(cfg.seeds, cfg.accept_rate, name=name))
-        except PluginError as e:
-            report = Report(name, (CheckResult("protocol", "error", str(e)),))
+        confined = _confinement(name)
+        if confined is not None and not confined.passed:
+            report = Report(name, (confined,))
+        else:
+            try:
+                report = check_task(registry.get_task(name), CheckConfig(cfg.seeds, cfg.accept_rate, name=name))
+            except PluginError as e:
+                report = Report(name, (CheckResult("protocol", "error", str(e)),))
+            if confined is not None:
+                report = Report(name, (confined, *report.results))
         ok &= report.passed
         print(json.dumps(report.to_dict()) if args.json else report.text(), flush=True)
     return 0 if ok else 1

@@ -14,6 +14,10 @@ Why it works this way:
   heading is an *error*, not a warning: it is the task's specification, the one place saying
   what success means; a warning scrolls by unseen in a run of hundreds of episodes, and the fix
   is three headings.
+* A package written by the task generator (it ships a confinement manifest, or its distribution
+  has the keyword ``generated-by-llm``) is re-checked before it is imported: unchanged since
+  acceptance and passing the static confinement check (:mod:`capmj.confine.manifest`), else a
+  :class:`~capmj.errors.ConfinementError` and nothing of it runs.
 * ``CAPMJ_DISABLE_PLUGINS=1`` turns discovery off (hermetic tests, notebooks); then only tasks
   added with :func:`register` exist.
 """
@@ -31,7 +35,8 @@ from dataclasses import dataclass, field
 from importlib import metadata
 from typing import TYPE_CHECKING, Any, Sequence
 
-from capmj.errors import ConfigError, PluginError
+from capmj.confine.manifest import confinement_problems
+from capmj.errors import ConfigError, ConfinementError, PluginError
 
 if TYPE_CHECKING:  # the protocol pulls in numpy and the simulator; listing must stay cheap
     from capmj.tasks.protocol import Task
@@ -187,6 +192,12 @@ class TaskRegistry:
                 raise self._failed[name]
             info = scan.entries[name]
             where = f"task plugin {name!r} from {info.distribution} {info.version} ({info.value})"
+            problems = confinement_problems(scan.points[name])
+            if problems:  # LLM-written code changed since acceptance: never import it
+                self._failed[name] = ConfinementError(
+                    f"{where} is LLM-written and fails its confinement check, so it is not imported: "
+                    f"{'; '.join(problems[:5])}")
+                raise self._failed[name]
             try:
                 task = _instantiate(scan.points[name].load())
             except Exception as e:  # anything a foreign module raises at import must stay contained
@@ -198,6 +209,13 @@ class TaskRegistry:
                 raise self._failed[name]
             self._loaded[name] = task
             return task
+
+    def confinement(self, name: str) -> list[str] | None:
+        """What fails the confinement check of ``name``'s package (``[]``: nothing), or ``None``
+        when the task is not LLM-written; imports nothing."""
+        with self._lock:
+            point = self._scan().points.get(name)
+        return None if point is None else confinement_problems(point)
 
     def register(self, task: Task, *, replace: bool = False) -> Task:
         """Add a task by hand (tests, notebooks); works with plugins disabled.  Returns ``task``.
@@ -333,12 +351,17 @@ def resolve(selector: str | Sequence[str]) -> list[str]:
     return DEFAULT.resolve(selector)
 
 
+def confinement(name: str) -> list[str] | None:
+    return DEFAULT.confinement(name)
+
+
 def reset() -> None:
     """:meth:`TaskRegistry.reset` of :data:`DEFAULT`."""
     DEFAULT.reset()
 
 
 __all__ = [
-    "DEFAULT", "DISABLE_ENV", "DOC_PARTS", "GROUP", "REGISTERED", "TaskInfo", "TaskRegistry", "broken", "get_task", "list_tasks",
+    "DEFAULT", "DISABLE_ENV", "DOC_PARTS", "GROUP", "REGISTERED", "TaskInfo", "TaskRegistry", "broken", "confinement",
+    "get_task", "list_tasks",
     "plugins_disabled", "register", "reset", "resolve", "tags_of", "validate_task",
 ]
