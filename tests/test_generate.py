@@ -8,6 +8,7 @@ pip installing the package into a fresh virtualenv and a benchmark run from it.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import site
@@ -161,6 +162,31 @@ def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
 
 
 # --------------------------------------------------------------------------------------- rejections
+
+    # accepted means confined: the manifest names the module's sha256; `tasks check` re-checks it
+    manifest = json.loads((out / "capmj_generated_test" / "capmj-confinement.json").read_text())
+    module = out / "capmj_generated_test" / "put_blocks_in_zone_of_same_color.py"
+    entry = manifest["modules"]["put_blocks_in_zone_of_same_color.py"]
+    assert entry["sha256"] == hashlib.sha256(module.read_bytes()).hexdigest() and entry["task"] == GOOD
+    assert entry["confinement"]["static"] == ["parse", "imports", "names"]
+    check = subprocess.run([str(py), "-m", "capmj.tasks", "check", GOOD, "--seeds", "1"], capture_output=True,
+                           text=True, timeout=300, env=env, cwd=tmp_path)
+    assert check.returncode == 0 and "PASS  confinement" in check.stdout, check.stdout + check.stderr
+    marker = tmp_path / "edited-module-ran"
+    module.write_text(module.read_text().replace(
+        "from capmj.tasks.spawn import Spawner, pick_colors\n",
+        f"from capmj.tasks.spawn import Spawner, pick_colors\nopen({str(marker)!r}, 'w').close()\n"))
+    check = subprocess.run([str(py), "-m", "capmj.tasks", "check", GOOD, "--seeds", "1"], capture_output=True,
+                           text=True, timeout=300, env=env, cwd=tmp_path)
+    assert check.returncode == 1 and "FAIL  confinement" in check.stdout, check.stdout + check.stderr
+    assert "edited after acceptance" in check.stdout and "'open' is not allowed" in check.stdout
+    bench = subprocess.run([str(py), "-m", "capmj.bench", "--tasks", GOOD, "--seeds", "10001", "--workers", "0",
+                            "--no-log", "--no-progress", "--out", str(tmp_path / "bench-edited")],
+                           capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
+    assert bench.returncode != 0 and "fails its confinement check, so it is not imported" in bench.stderr, bench.stderr
+    assert not marker.exists()  # the edited module never ran
+
+
 def test_broken_candidates_rejected_at_their_stage(tmp_path, monkeypatch):
     monkeypatch.setenv("CAPMJ_MARKER_DIR", str(tmp_path))  # broken_import_os would create 'ran' here
     files = ["broken_import_os.py", "broken_open_call.py", "broken_solved_at_reset.py", "broken_wrong_zone.py",

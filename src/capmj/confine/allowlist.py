@@ -89,7 +89,7 @@ def ordered_members(module: str) -> tuple[str, ...]:
 def transit_modules() -> frozenset[str]:
     """Modules a dotted path may pass through on its way to an allowed module (``capmj``,
     ``capmj.tasks``), besides the importable ones.  They offer no members of their own."""
-    out = set()
+    out: set[str] = set()
     for m in IMPORTABLE:
         parts = m.split(".")
         out.update(".".join(parts[:i]) for i in range(1, len(parts)))

@@ -28,6 +28,7 @@ import os
 import sys
 from importlib.abc import MetaPathFinder
 from pathlib import Path
+from types import FrameType
 from typing import Any, Callable, Sequence
 
 from capmj.confine.allowlist import IMPORTABLE
@@ -75,7 +76,7 @@ class Guard:
         """The nearest frame outside the import machinery belongs to the candidate's file (or to
         code compiled at run time, whose file is no real module: ``<string>`` and the like;
         frozen standard-library modules, ``<frozen ...>``, are trusted)."""
-        f = sys._getframe(2)
+        f: FrameType | None = sys._getframe(2)
         while f is not None:
             name = f.f_code.co_filename
             if not (name.startswith("<frozen") or "/importlib/" in name or name == __file__):

@@ -106,7 +106,8 @@ def _parents(tree: ast.AST) -> dict[ast.AST, ast.AST]:
 
 def _follow(name: ast.Name, module: str, parents: dict[ast.AST, ast.AST]) -> Finding | None:
     """Rule 2 for one use of a module alias: the dotted path must end at a listed member."""
-    path, written, node = module, name.id, name
+    path, written = module, name.id
+    node: ast.expr = name
     while True:
         parent = parents.get(node)
         if not (isinstance(parent, ast.Attribute) and parent.value is node):
