@@ -24,6 +24,7 @@ Usage tokens in answers are approximate (characters / 4) but always present.
 from __future__ import annotations
 
 import json
+import re
 import threading
 import time
 from collections import deque
@@ -59,6 +60,10 @@ class Reply:
     error_message: str = "stub error"
     body: dict[str, Any] | None = None
     headers: dict[str, str] | None = None
+    token_interval_s: float = 0.0
+    """Streamed requests: seconds between two chunks (one per word of ``text``)."""
+    stall_after: int | None = None
+    """Streamed requests: after this many chunks, send nothing more (hold the connection)."""
 
     @staticmethod
     def answer(text: str) -> Reply:
@@ -75,6 +80,11 @@ class Reply:
     @staticmethod
     def raw(body: dict[str, Any]) -> Reply:
         return Reply(body=body)
+
+    @staticmethod
+    def trickle(text: str, interval_s: float, stall_after: int | None = None) -> Reply:
+        """A streamed answer, one word every ``interval_s``; silent after ``stall_after`` words."""
+        return Reply(text=text, token_interval_s=interval_s, stall_after=stall_after)
 
 
 Responder = Callable[[dict[str, Any]], "str | Reply"]
@@ -266,6 +276,38 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
             error = {"message": message, "type": "stub_error", "code": status}
             self._send_json(status, {"error": error}, headers)
 
+        def _stream(self, body: dict[str, Any], reply: Reply, serial: int) -> None:
+            """Server-sent events as OpenAI streams them: one chunk per word, usage, [DONE]."""
+            full = completion_body(body, reply.text or "", serial)
+            self.send_response(200)
+            self.send_header("Content-Type", "text/event-stream")
+            self.send_header("Cache-Control", "no-cache")
+            self.end_headers()
+            base = {"id": full["id"], "object": "chat.completion.chunk", "created": full["created"],
+                    "model": full["model"]}
+
+            def send(payload: dict[str, Any] | str) -> None:
+                data = payload if isinstance(payload, str) else json.dumps(payload)
+                self.wfile.write(f"data: {data}\n\n".encode())
+                self.wfile.flush()
+
+            words = re.findall(r"\S+\s*|\s+", reply.text or "")
+            try:
+                for i, word in enumerate(words):
+                    if reply.stall_after is not None and i >= reply.stall_after:
+                        server._stopping.wait(3600)  # silent until the client gives up or we stop
+                        return
+                    delta = {"role": "assistant", "content": word} if i == 0 else {"content": word}
+                    send({**base, "choices": [{"index": 0, "delta": delta, "finish_reason": None}]})
+                    if reply.token_interval_s and server._stopping.wait(reply.token_interval_s):
+                        return
+                send({**base, "choices": [{"index": 0, "delta": {}, "finish_reason": "stop"}]})
+                if (body.get("stream_options") or {}).get("include_usage"):
+                    send({**base, "choices": [], "usage": full["usage"]})
+                send("[DONE]")
+            except (BrokenPipeError, ConnectionResetError):
+                return  # the client gave up
+
         def do_GET(self) -> None:  # noqa: N802 - http.server API
             if self.path.rstrip("/").endswith("/models"):
                 models = [{"id": "stub", "object": "model"}]
@@ -296,7 +338,7 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
             elif reply.body is not None:
                 self._send_json(200, reply.body)
             elif body.get("stream"):
-                self._error(400, "the stub server does not stream")
+                self._stream(body, reply, serial)
             else:
                 self._send_json(200, completion_body(body, reply.text or "", serial))
 

@@ -58,4 +58,11 @@ class BudgetExceeded(PlanError):
 
 
 class LLMError(AgentError):
-    """The LLM provider failed (timeout, HTTP error, malformed answer) after all retries."""
+    """The LLM provider failed (timeout, HTTP error, malformed answer) after all retries.
+
+    ``partial`` is the text a streamed answer had delivered before it stalled or broke (else None).
+    """
+
+    def __init__(self, message: str, *, partial: str | None = None) -> None:
+        super().__init__(message)
+        self.partial = partial

@@ -2,8 +2,8 @@
 
 Why: benchmark runs are repeated (debugging a task, re-scoring, CI) and a temperature-0 answer to
 the same request is worth reusing instead of paying for it again.  The key covers model, api_base,
-the full messages (images included), temperature, max_tokens and the sampling seed (when one is
-sent: requests without a seed keep the keys they had before seeds were sent), but never the API
+the full messages (images included), temperature, max_tokens, the sampling seed and the stop
+sequences (when sent: requests without them keep the keys they had before they were sent), but never the API
 key: rotating a key must not invalidate the cache, and secrets must not be derivable from file
 names.
 
@@ -51,6 +51,7 @@ def cache_key(
     temperature: float,
     max_tokens: int,
     seed: int | None = None,
+    stop: Sequence[str] = (),
 ) -> str:
     """sha256 hex digest of the canonical JSON of the request's answer-determining fields."""
     payload: dict[str, Any] = {
@@ -63,6 +64,8 @@ def cache_key(
     }
     if seed is not None:
         payload["seed"] = int(seed)
+    if stop:  # absent when none is sent: requests without stops keep their keys
+        payload["stop"] = list(stop)
     try:
         canonical = json.dumps(
             payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False

@@ -24,6 +24,7 @@ from typing import Any
 
 from capmj.errors import ConfigError, LLMError
 from capmj.llm.cache import CompletionCache, cache_key
+from capmj.llm.stream import StreamCut, cut_at_stop, drain
 
 __all__ = ["CallRecord", "Completion", "DEFAULT_TIMEOUT_S", "LLMClient", "LLMConfig", "Usage", "image_part",
            "set_request_gate", "takes_seed", "text_part"]
@@ -72,6 +73,9 @@ class LLMConfig:
     mock_response: str | None = None
     cache_only: bool = False
     """Answer only from ``cache_dir``: a missing entry is an LLMError, never a live call."""
+    stream: bool = True
+    """Stream answers, so ``timeout_s`` bounds the silence between two chunks (a stall), not the
+    whole answer (:mod:`capmj.llm.stream`); a stalled answer keeps what arrived."""
 
     def __post_init__(self) -> None:
         if not self.model:
@@ -110,7 +114,8 @@ class Completion:
 
 @dataclass(frozen=True)
 class CallRecord:
-    """Accounting for one ``complete`` call, successful (``error is None``) or not."""
+    """Accounting for one ``complete`` call, successful (``error is None``) or not; ``partial`` is
+    the text a stalled or broken stream had delivered before the call failed."""
 
     purpose: str
     model: str
@@ -121,6 +126,7 @@ class CallRecord:
     cached: bool
     attempts: int
     error: str | None = None
+    partial: str | None = None
 
 
 @dataclass(frozen=True)
@@ -251,7 +257,7 @@ class LLMClient:
         )
 
     def _record(self, c: Completion | None, *, purpose: str, latency: float, attempts: int,
-                error: str | None = None) -> None:
+                error: str | None = None, partial: str | None = None) -> None:
         record = CallRecord(
             purpose=purpose,
             model=c.model if c else self.config.model,
@@ -262,6 +268,7 @@ class LLMClient:
             cached=c.cached if c else False,
             attempts=attempts,
             error=error,
+            partial=partial,
         )
         with self._lock:
             self._records.append(record)
@@ -269,13 +276,14 @@ class LLMClient:
     # -- the call ---------------------------------------------------------------------------
     def complete(self, messages: Sequence[Message], *, purpose: str = "",
                  mock_response: str | None = None, temperature: float | None = None,
-                 seed: int | None = None) -> Completion:
+                 seed: int | None = None, stop: Sequence[str] = ()) -> Completion:
         """Answer ``messages`` (OpenAI chat format), from the cache when possible.
 
         ``temperature`` overrides ``config.temperature`` for this call; ``seed`` asks the provider
         to sample reproducibly (the OpenAI ``seed`` parameter, honoured by OpenAI, llama.cpp,
-        Ollama, vLLM; not sent to providers litellm knows do not take it).  Both are part of the
-        cache key.  ``mock_response`` (or ``config.mock_response``) makes litellm answer offline
+        Ollama, vLLM; not sent to providers litellm knows do not take it).  ``stop`` sequences end
+        the answer (sent to the provider, and cut here too, for one that ignores them).  All three
+        are part of the cache key.  ``mock_response`` (or ``config.mock_response``) makes litellm answer offline
         without any HTTP; such answers are never cached, so they cannot poison a cache used for
         real runs.  Raises :class:`LLMError` when the provider fails after all retries or answers
         no text.
@@ -288,13 +296,16 @@ class LLMClient:
             raise ConfigError(f"temperature must be a finite number >= 0, got {temperature}")
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
             raise ConfigError(f"seed must be an integer or None, got {seed!r}")
+        stop = tuple(stop)
+        if not all(isinstance(x, str) and x for x in stop) or len(stop) > 4:
+            raise ConfigError(f"stop must be at most 4 non-empty strings (the OpenAI limit), got {stop!r}")
         request: list[dict[str, Any]] = [dict(m) for m in messages]  # copies: the caller's may change
         mock = mock_response if mock_response is not None else cfg.mock_response
         start = time.monotonic()
         key = None
         if self._cache is not None and mock is None:
             key = cache_key(model=cfg.model, api_base=cfg.api_base, messages=request,
-                            temperature=temperature, max_tokens=cfg.max_tokens, seed=seed)
+                            temperature=temperature, max_tokens=cfg.max_tokens, seed=seed, stop=stop)
             stored = self._cache.get(key)
             if stored is not None:
                 hit = Completion(
@@ -314,20 +325,21 @@ class LLMClient:
                 raise miss
         _import_litellm()  # seconds on first use; not part of the call's latency
         start = time.monotonic()
-        result, attempts, error = self._call_with_retries(request, mock, temperature, seed)
+        result, attempts, error = self._call_with_retries(request, mock, temperature, seed, stop)
         if error is not None:
             self._record(None, purpose=purpose, latency=time.monotonic() - start,
-                         attempts=attempts, error=str(error))
+                         attempts=attempts, error=str(error), partial=error.partial)
             raise error
-        completion = self._to_completion(result, start=start, attempts=attempts, purpose=purpose)
+        completion = self._to_completion(result, start=start, attempts=attempts, purpose=purpose, stop=stop)
         if key is not None and self._cache is not None:
             self._store(key, completion)
         self._record(completion, purpose=purpose, latency=completion.latency_s, attempts=attempts)
         return completion
 
     def _call_with_retries(self, messages: list[dict[str, Any]], mock: str | None, temperature: float,
-                           seed: int | None) -> tuple[Any, int, LLMError | None]:
-        """(response, attempts, None) on success, (None, attempts, error) on final failure."""
+                           seed: int | None, stop: tuple[str, ...]) -> tuple[Any, int, LLMError | None]:
+        """(response, attempts, None) on success, (None, attempts, error) on final failure; a
+        failed stream's text so far is on the error (``partial``)."""
         cfg = self.config
         litellm = _import_litellm()
         kwargs: dict[str, Any] = dict(
@@ -339,7 +351,12 @@ class LLMClient:
             kwargs["seed"] = seed
         if mock is not None:
             kwargs["mock_response"] = mock
+        if stop:
+            kwargs["stop"] = list(stop)
+        if cfg.stream:
+            kwargs.update(stream=True, stream_options={"include_usage": True})
         total = cfg.max_retries + 1
+        partial: str | None = None
         for attempt in range(1, total + 1):
             gate = _request_gate
             try:
@@ -347,10 +364,15 @@ class LLMClient:
                     gate.acquire()
                 try:
                     response = litellm.completion(**kwargs)
+                    if cfg.stream:
+                        response = drain(response, litellm, messages)
                 finally:
                     if gate is not None:
                         gate.release()
             except Exception as exc:  # every provider failure becomes LLMError below
+                if isinstance(exc, StreamCut):
+                    partial = exc.partial or partial
+                    exc = exc.error  # noqa: PLW2901 - classify the cause, keep what arrived
                 wait_s = cfg.backoff_s * 2 ** (attempt - 1)
                 asked = _retry_after(exc)
                 if asked is not None:
@@ -359,8 +381,9 @@ class LLMClient:
                     self._sleep(wait_s)
                     continue
                 plural = "s" if attempt != 1 else ""
+                got = f"; {len(partial)} characters had arrived" if partial else ""
                 error = LLMError(f"{cfg.model}: {type(exc).__name__}: {_short(exc)} "
-                                 f"after {attempt} attempt{plural}")
+                                 f"after {attempt} attempt{plural}{got}", partial=partial)
                 error.__cause__ = exc
                 return None, attempt, error
             if _text_of(response) is None:
@@ -369,11 +392,11 @@ class LLMClient:
         raise AssertionError("unreachable")  # pragma: no cover
 
     def _to_completion(self, response: Any, *, start: float, attempts: int,
-                       purpose: str) -> Completion:
+                       purpose: str, stop: tuple[str, ...] = ()) -> Completion:
         usage = getattr(response, "usage", None)
         model = getattr(response, "model", None)
         return Completion(
-            text=_text_of(response) or "",
+            text=cut_at_stop(_text_of(response) or "", stop),
             model=model if isinstance(model, str) and model else self.config.model,
             prompt_tokens=_int(getattr(usage, "prompt_tokens", 0)),
             completion_tokens=_int(getattr(usage, "completion_tokens", 0)),
