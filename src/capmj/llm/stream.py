@@ -19,7 +19,7 @@ from typing import Any
 class StreamCut(Exception):
     """A stream that ended in an exception after ``partial`` had arrived (``error`` is the cause)."""
 
-    def __init__(self, error: BaseException, partial: str, chunks: int) -> None:
+    def __init__(self, error: Exception, partial: str, chunks: int) -> None:
         super().__init__(f"{type(error).__name__}: {error}")
         self.error = error
         self.partial = partial
