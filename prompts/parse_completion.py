@@ -14,6 +14,8 @@ from env_utils import get_obj_names, get_obj_pos, get_obj_rot, get_bbox, get_obj
 # (z difference = mean of the two block sizes, +-0.015), none tilted.
 # Rules: no imports; only these names, np and math.
 
+#@ stop: ["\n\nobjects = ["]
+
 #@ example: stack_done
 #@ scene: {"objects": [["zone", "green", 0.5, 0.2], ["zone", "red", 0.62, -0.25], ["block", "blue", 0.5, 0.2, "small", 0.02], ["block", "yellow", 0.5, 0.2, "small", 0.06], ["block", "red", 0.5, 0.2, "small", 0.1]]}
 #@ expect: true

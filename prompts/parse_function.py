@@ -8,6 +8,8 @@ from env_utils import get_obj_names, get_obj_pos, get_obj_rot, get_bbox, get_col
 # Table: x from 0.25 (top) to 0.75 (bottom), y from -0.5 (left) to 0.5 (right), z up.
 # Rules: no imports and no classes; only these functions, np, math, itertools and shapely. You may call other helper functions that do not exist yet.
 
+#@ stop: ["\n\n# define function:"]
+
 #@ example: get_distance
 #@ scene: {"objects": [["block", "red", 0.5, 0.1]]}
 #@ check: abs(get_distance([0.3, 0.0, 0.0], [0.6, 0.4, 0.02]) - 0.5) < 1e-9

@@ -10,6 +10,8 @@ from env_utils import get_obj_names, get_obj_pos, get_obj_rot, get_bbox, get_col
 # Warm colours: red, yellow, orange, brown, pink, gold. Cool colours: blue, green, cyan, purple, gray, violet, indigo, silver.
 # Rules: no imports; only these functions, np and math. Use the exact names from objects.
 
+#@ stop: ["\n\nobjects = ["]
+
 #@ example: left_of_bowl
 #@ scene: {"objects": [["bowl", "green", 0.5, 0.0], ["block", "red", 0.4, -0.25], ["block", "blue", 0.62, -0.15], ["block", "yellow", 0.42, 0.22], ["bowl", "purple", 0.62, 0.3]]}
 #@ expect: ["movable small red block with obj_id 2", "movable small blue block with obj_id 3"]

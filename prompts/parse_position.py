@@ -10,6 +10,8 @@ from env_utils import get_obj_names, get_obj_pos, get_bbox, denormalize, is_targ
 # is_target_occupied([x, y], r) -> names of the objects within r of the point.
 # Rules: no imports; only these functions, np, math and shapely.
 
+#@ stop: ["\n\nobjects = ["]
+
 #@ example: top_right_corner
 #@ scene: {"objects": [["block", "blue", 0.55, -0.2], ["block", "yellow", 0.4, 0.1], ["block", "red", 0.6, 0.25]]}
 #@ expect: [0.3, 0.4]

@@ -23,6 +23,8 @@ from plan_utils import parse_obj_name, parse_position
 # Rules: no imports and no classes; only the functions above, np, math, itertools and shapely. Write the whole plan at once, with comments on your reasoning.
 # You may call a clearly named helper function that does not exist yet: it will be written for you.
 
+#@ stop: ["\n\nobjects = ["]
+
 #@ example: stack_in_zone
 #@ scene: {"objects": [["zone", "green", 0.45, 0.25], ["zone", "red", 0.62, -0.3], ["block", "blue", 0.4, -0.15], ["block", "yellow", 0.6, 0.05], ["block", "red", 0.33, 0.05]]}
 #@ task: stack-all-blocks-on-a-zone

@@ -473,3 +473,23 @@ def test_bench_cli_runs_the_llm_agent_in_a_worker_and_logs_every_prompt(server: 
     assert (loop["replans"], loop["identical_replans"]) == (1, 0)
     assert loop["mean_tokens"] == rec["llm"]["prompt_tokens"] + rec["llm"]["completion_tokens"] > 0
     assert "| **Overall** | llm openai/stub | 1/1 (100 %) | 2.00 | 2/2 (100 %) |" in (out / "summary.md").read_text()
+
+
+def test_a_plan_running_on_into_the_next_example_is_cut_at_the_stop_sequence(server: StubLLMServer) -> None:
+    """A small model writes its plan, then the prompt's next few-shot example (issue #27): only the
+    plan runs; the copied example (another scene's names, an undefined call) never does."""
+    plan = RIGHT_PLAN.replace("assert [n for n in is_target_occupied('fixed purple zone with obj_id 2') "
+                              "if ' block ' in n] == []\n", "")
+    run_on = (plan.strip() + "\n\nobjects = ['movable small cyan block with obj_id 7']\n"
+              "# Put the cyan block in the bowl.\nput_first_on_second('movable small cyan block with obj_id 7', "
+              "'fixed blue bowl with obj_id 9')\nnot_a_function()\n")
+    router = full_router()
+    router.handlers["planner"] = run_on
+    server.respond_with(router)
+    result = episode(agent(server, attempts=1))
+    assert result.success and result.error is None, result.error
+    planner_requests = [r for r in server.requests if lmp_of(r) == "planner"]
+    assert planner_requests[0]["stop"] == ["\n\nobjects = ["]
+    assert all(r["stop"] == ["\n\n# define function:"] for r in server.requests if lmp_of(r) == "parse_function")
+    (first,) = result.llm["attempts"]
+    assert "obj_id 7" not in (first["code"] or "") and "not_a_function" not in (first["code"] or "")

@@ -102,6 +102,7 @@ class LMPCall:
     result: str | None = None
     error: str | None = None
     cached: bool | None = None
+    partial: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -151,14 +152,24 @@ class LMPSession:
         setattr(call, part, body)
         self.recorder.text(f"llm/attempt{self.attempt}/{call.lmp}/{call.n}/{part}", body)
 
+    def stop_for(self, lmp: str) -> tuple[str, ...]:
+        """The stop sequences of the LMP's prompt file (``#@ stop:``); none for a text prompt."""
+        folder = Path(self.directory) if self.directory is not None else prompts_dir()
+        return self.prompt(lmp).stop if (folder / f"{lmp}.py").is_file() else ()
+
     def ask(self, call: LMPCall, messages: list[dict[str, Any]], **sampling: Any) -> str:
-        """Send ``messages`` (recording prompt and completion); LLMError propagates.  ``sampling``
-        (``temperature``, ``seed``) overrides the client's for this call."""
+        """Send ``messages`` (recording prompt and completion); LLMError propagates, and the text
+        a stalled stream had delivered is recorded as ``partial``.  ``sampling`` (``temperature``,
+        ``seed``) overrides the client's for this call; the LMP's stop sequences always apply."""
         self.record(call, "prompt", messages_text(messages))
+        stop = self.stop_for(call.lmp)
         try:
-            completion = self.complete(messages, purpose=f"{call.lmp}#{call.n}", **sampling)
+            completion = self.complete(messages, purpose=f"{call.lmp}#{call.n}", **sampling,
+                                       **({"stop": stop} if stop else {}))
         except LLMError as exc:
             self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            if exc.partial:
+                self.record(call, "partial", exc.partial)
             raise
         call.cached = bool(getattr(completion, "cached", False))
         self.record(call, "completion", completion.text)

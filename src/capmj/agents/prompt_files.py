@@ -23,7 +23,7 @@ import ast
 import json
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -82,14 +82,32 @@ class PromptFile:
     template: str
     """The prompt without metadata lines, still containing :data:`QUESTION`."""
     examples: tuple[Example, ...]
+    meta: Mapping[str, str] = field(default_factory=dict)
+    """File-level metadata: ``#@ key: value`` lines outside every example (e.g. ``stop``)."""
 
     def render(self, question: str) -> str:
         return self.template.replace(QUESTION, question.rstrip("\n"))
+
+    @property
+    def stop(self) -> tuple[str, ...]:
+        """The stop sequences of this LMP (``#@ stop: [...]``, JSON): where the prompt's *next*
+        example would begin, so a model that runs on after its answer is cut there."""
+        raw = self.meta.get("stop")
+        if raw is None:
+            return ()
+        try:
+            value = json.loads(raw)
+        except json.JSONDecodeError as exc:
+            raise ConfigError(f"{self.path}: '#@ stop:' is not JSON: {exc}") from None
+        if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+            raise ConfigError(f"{self.path}: '#@ stop:' must be a JSON list of non-empty strings")
+        return tuple(value)
 
 
 def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
     kept: list[str] = []
     examples: list[Example] = []
+    meta: dict[str, str] = {}
     current: dict[str, Any] | None = None
     for lineno, line in enumerate(raw.splitlines(), start=1):
         if line.startswith(META):
@@ -108,6 +126,8 @@ def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
                 current = None
             elif current is not None:
                 current["meta"][key] = value
+            else:
+                meta[key] = value
             continue
         kept.append(line)
         if current is not None:
@@ -120,7 +140,7 @@ def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
     ids = [e.id for e in examples]
     if len(set(ids)) != len(ids):
         raise ConfigError(f"{path}: duplicate example ids in {ids}")
-    return PromptFile(name, path, raw, template, tuple(examples))
+    return PromptFile(name, path, raw, template, tuple(examples), meta)
 
 
 @lru_cache(maxsize=64)

@@ -104,18 +104,20 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
     host = urlsplit(api_base).hostname if api_base else None
     port = urlsplit(api_base).port if api_base else None
     prompts: dict[str, str] = {}
+    stops: dict[str, list[str]] = {}
     if getattr(agent, "name", "") in ("llm", "reference"):
-        from capmj.agents.prompt_files import prompts_dir
+        from capmj.agents.prompt_files import load_prompt, prompts_dir
 
-        folder = getattr(agent, "prompts_dir", None) or prompts_dir()
-        prompts = _prompt_hashes(Path(folder))
+        folder = Path(getattr(agent, "prompts_dir", None) or prompts_dir())
+        prompts = _prompt_hashes(folder)
+        stops = {p.stem: list(load_prompt(p.name, folder).stop) for p in sorted(folder.glob("*.py"))}
     budgets: dict[str, Any] = {"episode": _asdict(getattr(agent, "budget", None) or Budget())}
     for name in ("plan_budget", "lmp_budget", "limits"):
         if hasattr(agent, name):
             budgets[name] = _asdict(getattr(agent, name))
     if cfg is not None:
         budgets["llm"] = {"timeout_s": cfg.timeout_s, "max_retries": cfg.max_retries, "max_tokens": cfg.max_tokens,
-                          "temperature": cfg.temperature}
+                          "temperature": cfg.temperature, "stream": cfg.stream, "stop": stops}
     price = getattr(agent, "price", None)
     return {
         "git": git_state(),
