@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, NoReturn, Sequence
 
 from capmj.errors import CapmjError, ConfigError
+from capmj.llm.options import add_llm_options, llm_values
 
 if TYPE_CHECKING:  # the bench modules load lazily: importing the CLI stays light
     from capmj.bench.grid import GridStats, Job
@@ -30,8 +31,10 @@ TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
-               "replan_retries", "timeout_s", "cache_dir", "cache_only", "episode_max_tokens", "episode_max_cost_usd",
-               "price")
+               "replan_retries", "timeout_s", "max_tokens", "cache_dir", "cache_only", "episode_max_tokens",
+               "episode_max_cost_usd", "price")
+"""The LLM agent's keyword arguments the command line sets (the shared client options among them,
+:data:`capmj.llm.options.LLM_OPTIONS`, by their ``LLMConfig`` field names)."""
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
 LLM_CONCURRENCY = 4
@@ -75,11 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
                         f"default: the test split {TEST_SEEDS} (50 odd seeds from 10001)")
     p.add_argument("--agent", default=None, help="agent: oracle (default), reference, llm")
     g = p.add_argument_group("LLM agent options (passed to the agent; see docs/llm.md)")
-    g.add_argument("--model", default=None, help="LLM model, e.g. gpt-4o-mini")
-    g.add_argument("--api-base", dest="api_base", default=None, help="OpenAI-compatible API base URL")
+    add_llm_options(g)  # --model, --api-base, --temperature, --llm-timeout, --llm-max-tokens, --llm-cache
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
-    g.add_argument("--temperature", type=float, default=None, help="sampling temperature")
     g.add_argument("--on-unknown", dest="on_unknown", default=None, choices=("replan", "stop"),
                    help="what an unknown reporter verdict does (default: replan)")
     g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
@@ -87,10 +88,6 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--replan-retries", dest="replan_retries", type=int, default=None, metavar="N",
                    help="requests after a re-plan identical to an earlier plan, each hotter, before that plan is "
                         "recorded as not re-run (default: 3)")
-    g.add_argument("--llm-timeout", dest="timeout_s", type=float, default=None, metavar="S",
-                   help="seconds per LLM request before it is retried (default 300: slow local servers)")
-    g.add_argument("--llm-cache", dest="cache_dir", default=None, metavar="DIR",
-                   help="cache completions in DIR (default: $CAPMJ_LLM_CACHE); reruns replay them")
     g.add_argument("--cache-only", dest="cache_only", action="store_true", default=None,
                    help="answer only from the cache: a missing entry fails the episode, no live call")
     g.add_argument("--yes", action="store_true", help=f"start more than {CONFIRM_LLM_EPISODES} LLM episodes "
@@ -326,7 +323,8 @@ def _settings(args: argparse.Namespace) -> _Settings:
     tasks_sel = args.tasks or prev_args.get("tasks") or DEFAULT_TASKS
     seeds_sel = args.seeds or prev_args.get("seeds") or TEST_SEEDS
     agent_name = args.agent or prev_args.get("agent") or "oracle"
-    options = {k: getattr(args, k) for k in LLM_OPTIONS}
+    shared = llm_values(args)
+    options = {k: shared[k] if k in shared else getattr(args, k) for k in LLM_OPTIONS}
     if args.resume and not any(v is not None for v in options.values()) and args.agent is None:
         options.update({k: v for k, v in (prev_args.get("agent_options") or {}).items() if k in LLM_OPTIONS})
     options = {k: v for k, v in options.items() if v is not None}

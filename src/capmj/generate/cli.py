@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 from typing import NoReturn
 
 from capmj.errors import CapmjError
+from capmj.llm.options import add_llm_options, llm_values
 
 EPILOG = """examples:
   python -m capmj.generate --mode bottom-up --n 5 --model gpt-4o-mini --out gen/run1
@@ -27,7 +29,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parser() -> argparse.ArgumentParser:
-    from capmj.generate.config import MODES, default_package
+    from capmj.generate.config import MODES, GenerateConfig, default_package
     from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
 
     ap = _Parser(prog="python -m capmj.generate", description=__doc__, epilog=EPILOG,
@@ -36,9 +38,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--n", type=int, default=1, help="number of candidates (default 1)")
     ap.add_argument("--name", help="top-down: the task name (kebab-case)")
     ap.add_argument("--description", help="top-down: the task's goal text")
-    ap.add_argument("--model", required=True, help="litellm model string, e.g. gpt-4o-mini or openai/<local model>")
-    ap.add_argument("--api-base", help="OpenAI-compatible API base URL")
-    ap.add_argument("--temperature", type=float, default=0.0, help="sampling temperature (default 0)")
+    llm = ap.add_argument_group("LLM options (the same flags as python -m capmj.bench)")
+    add_llm_options(llm, {f.name: f.default for f in dataclasses.fields(GenerateConfig)
+                          if f.name in ("temperature", "timeout_s", "max_tokens")}, model_required=True)
     ap.add_argument("--out", type=Path, required=True, metavar="DIR", help="new folder for the plugin package")
     ap.add_argument("--package", default=None, help=f"distribution name (default {default_package()})")
     ap.add_argument("--seeds", type=int, default=DEFAULT_SEEDS, metavar="K",
@@ -46,7 +48,6 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--accept-rate", type=float, default=DEFAULT_ACCEPT_RATE, metavar="R",
                     help=f"minimum oracle success share over the seeds (default {DEFAULT_ACCEPT_RATE})")
     ap.add_argument("--workers", type=int, default=1, help="candidates generated in parallel (default 1)")
-    ap.add_argument("--cache-dir", type=Path, help="LLM completion cache (default $CAPMJ_LLM_CACHE, else none)")
     ap.add_argument("--cpu-limit", type=int, default=300, metavar="S", help="CPU seconds of a check worker (default 300)")
     ap.add_argument("--memory-limit", type=int, default=4096, metavar="MB", help="address space of a check worker (default 4096)")
     ap.add_argument("--wall-limit", type=float, default=600.0, metavar="S", help="wall seconds of a check worker (default 600)")
@@ -62,8 +63,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         cfg = GenerateConfig(
             mode=args.mode, model=args.model, out=args.out, n=args.n, name=args.name, description=args.description,
-            api_base=args.api_base, temperature=args.temperature, package=args.package or default_package(),
-            seeds=args.seeds, accept_rate=args.accept_rate, workers=args.workers, cache_dir=args.cache_dir,
+            **{k: v for k, v in llm_values(args).items() if k not in ("model", "cache_dir")},
+            package=args.package or default_package(), seeds=args.seeds, accept_rate=args.accept_rate,
+            workers=args.workers, cache_dir=Path(args.cache_dir) if args.cache_dir else None,
             limits=Limits(args.cpu_limit, args.memory_limit, args.wall_limit))
     except CapmjError as e:
         print(f"error: {e}", file=sys.stderr)

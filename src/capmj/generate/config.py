@@ -14,6 +14,7 @@ from typing import Literal
 
 from capmj.confine.manifest import GENERATED_TAG
 from capmj.errors import ConfigError
+from capmj.llm.client import DEFAULT_TIMEOUT_S
 from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
 
 MODES = ("bottom-up", "top-down")
@@ -57,7 +58,7 @@ class GenerateConfig:
     accept_rate: float = DEFAULT_ACCEPT_RATE
     workers: int = 1
     cache_dir: Path | None = None
-    timeout_s: float = 120.0
+    timeout_s: float = DEFAULT_TIMEOUT_S
     max_tokens: int = 4096
     limits: Limits = Limits()
 
