@@ -78,3 +78,19 @@ def test_cut_at_stop_takes_the_earliest_sequence() -> None:
     assert cut_at_stop("a\n# define x\nb\n# example\n", ("# example", "# define")) == "a\n"
     assert cut_at_stop("no stop here", ("# define",)) == "no stop here"
     assert cut_at_stop("objects = [1]", ()) == "objects = [1]"
+
+
+def test_the_bench_and_the_generator_share_the_llm_flags(tmp_path: Path) -> None:
+    from capmj.bench.cli import LLM_OPTIONS as BENCH_AGENT_OPTIONS
+    from capmj.bench.cli import build_parser as bench_parser
+    from capmj.generate.cli import parser as generate_parser
+    from capmj.llm.options import LLM_OPTIONS, llm_values
+
+    flags = ["--model", "openai/x", "--api-base", "http://127.0.0.1:1/v1", "--llm-timeout", "42",
+             "--llm-max-tokens", "99", "--llm-cache", str(tmp_path)]
+    gen = llm_values(generate_parser().parse_args(["--mode", "bottom-up", "--out", str(tmp_path / "o"), *flags]))
+    bench = llm_values(bench_parser().parse_args(["--agent", "llm", *flags]))
+    assert gen == bench == {"model": "openai/x", "api_base": "http://127.0.0.1:1/v1", "temperature": gen["temperature"],
+                            "timeout_s": 42.0, "max_tokens": 99, "cache_dir": str(tmp_path)}
+    assert gen["temperature"] == 0.0 and bench["temperature"] is None  # the bench resolves its defaults later
+    assert {o.field for o in LLM_OPTIONS} <= set(BENCH_AGENT_OPTIONS)  # every shared flag reaches the agent
