@@ -84,6 +84,8 @@ class ExampleLLM:
 
     prompts: Mapping[str, PromptFile] = field(default_factory=lambda: {n: load_prompt(n) for n in ALL_LMPS})
     asked: list[tuple[str, str]] = field(default_factory=list)
+    stops: list[tuple[str, ...]] = field(default_factory=list)
+    """The stop sequences each call was sent with."""
     drop_first_code_line: bool = False
     """Answer without the example's first code line (as a small model copying it did)."""
 
@@ -105,7 +107,8 @@ class ExampleLLM:
                 raise AssertionError(f"no {name} example answers {query!r}")
         raise AssertionError(f"unknown prompt: {user_text[:200]!r}")
 
-    def __call__(self, messages: Sequence[Mapping[str, Any]], purpose: str = "") -> Any:
+    def __call__(self, messages: Sequence[Mapping[str, Any]], purpose: str = "", stop: Sequence[str] = ()) -> Any:
+        self.stops.append(tuple(stop))
         user = messages[-1]["content"]
         lmp, text = self.answer(user)
         self.asked.append((lmp, user))

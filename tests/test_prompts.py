@@ -43,6 +43,22 @@ def _close(value, expected, tol: float = 1e-3) -> bool:
 
 
 @pytest.mark.parametrize("lmp", ALL_LMPS)
+def test_stop_sequences_cut_a_run_on_into_the_next_example_and_nothing_else(lmp: str) -> None:
+    """Each example's answer, followed as a small model writes it by the next example of the same
+    prompt, is cut back to exactly that answer; no answer contains its own stop sequence."""
+    from capmj.llm.stream import cut_at_stop
+
+    prompt = load_prompt(lmp)
+    assert prompt.stop, f"{lmp} declares no '#@ stop:'"
+    bodies = [ex.body for ex in prompt.examples]
+    for body, following in zip(bodies, bodies[1:] + bodies[:1]):
+        answer = body.split("\n", 2)[2] if lmp != "parse_function" else body.split("\n", 1)[1]
+        run_on = answer.rstrip("\n") + "\n\n" + following
+        assert cut_at_stop(run_on, prompt.stop) == answer.rstrip("\n"), (lmp, answer[:80])
+        assert cut_at_stop(answer, prompt.stop) == answer
+
+
+@pytest.mark.parametrize("lmp", ALL_LMPS)
 def test_prompt_file_is_well_formed(lmp: str) -> None:
     prompt = load_prompt(lmp)
     assert prompt.examples, f"{lmp} has no examples"
