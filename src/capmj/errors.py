@@ -16,6 +16,11 @@ class ConfigError(CapmjError, ValueError):
     """Bad user input: unknown name, malformed range, unwritable folder.  Names the valid choices."""
 
 
+class RecordError(CapmjError, ValueError):
+    """A stored record (a line of ``episodes.jsonl``, an attempt) does not match its schema: an
+    unknown or missing key, or a value of the wrong type.  Names the record type and the key."""
+
+
 class SimError(CapmjError):
     """The MuJoCo world could not be built, rendered or stepped."""
 

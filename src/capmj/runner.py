@@ -9,7 +9,7 @@ explained failed result, so a benchmark grid always completes.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -18,41 +18,14 @@ import numpy as np
 from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
 from capmj.record import ArrayFrames, NullRecorder, Recorder
+from capmj.records import Drift, EpisodeResult, LLMNotes
 from capmj.sim.world import World
 from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import Task, make_scene
 
+__all__ = ["FRAME_EVERY_STEPS", "EpisodeResult", "record_episode", "run_episode"]
+
 FRAME_EVERY_STEPS = 25  # 20 Hz of simulated time in logs
-
-
-@dataclass(frozen=True)
-class EpisodeResult:
-    """Everything a results table needs about one episode (one line of ``episodes.jsonl``)."""
-
-    task: str
-    seed: int
-    agent: str
-    model: str | None
-    success: bool
-    progress: float
-    reward: float
-    primitives: int
-    attempts: int
-    sim_s: float
-    wall_s: float
-    error: str | None
-    goal: str = ""
-    diagnostics: tuple[str, ...] = ()
-    llm: dict[str, Any] = field(default_factory=dict)
-    rrd: str | None = None
-    final_poses: dict[str, list[float]] = field(default_factory=dict)  # name -> [x, y, z, qw, qx, qy, qz]
-    drift: dict[str, Any] = field(default_factory=dict)  # see capmj.agents.attribution.placement_drift
-    calls: list[dict[str, Any]] = field(default_factory=list)  # LLM calls (messages + answer), see llm_meter
-
-    def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["diagnostics"] = list(self.diagnostics)
-        return d
 
 
 def _error_text(exc: BaseException) -> str:
@@ -116,16 +89,19 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
         success, progress, reward, diags = False, 0.0, 0.0, ()
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
-    llm = dict(ctx.notes.get("llm", {}))
+    llm = ctx.notes.get("llm")
+    poses: dict[str, tuple[float, ...]]
+    drift: Drift | None
     try:
         poses, drift = final_poses(world), placement_drift(world, ctx.placements)
     except Exception:  # noqa: BLE001 - attribution facts are optional
-        poses, drift = {}, {}
+        poses, drift = {}, None
     rec.text("verdict", ("SUCCESS" if success else "FAILURE") + f" (progress {progress:.2f})\n" + "\n".join(diags)
              + (f"\nerror: {error}" if error else ""))
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
-                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm,
-                         final_poses=poses, drift=drift, calls=list(ctx.notes.get("llm_calls", [])))
+                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags),
+                         llm if isinstance(llm, LLMNotes) else None, final_poses=poses, drift=drift,
+                         calls=tuple(ctx.notes.get("llm_calls", ())))
 
 
 def _oracle_goals(task: Any, seed: int) -> tuple:

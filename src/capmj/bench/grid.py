@@ -29,11 +29,12 @@ import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, ThreadPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from capmj.bench.results import ResultsWriter, episode_key, sanitize
+from capmj.records import EpisodeRecord, EpisodeResult
 
 MP_CONTEXT = "spawn"
 RECYCLE_LOGGING_WORKERS = 200
@@ -70,8 +71,6 @@ def _safe(s: str) -> str:
 
 def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, **extra: Any) -> dict[str, Any]:
     """A result line for an episode that produced no result of its own (worker crash, bad task)."""
-    from capmj.runner import EpisodeResult
-
     rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error).to_dict()
     rec.update(extra)
     return rec
@@ -184,17 +183,19 @@ class GridStats:
 
 
 class RecordSink:
-    """What every executor does with a finished episode: count it, hand it to ``on_result``."""
+    """What every executor does with a finished episode: read the worker's result (a plain dict,
+    as it crossed the process boundary), count it, hand it to ``on_result``."""
 
     agent: AgentSpec
     stats: GridStats
-    on_result: Callable[[Job, dict[str, Any]], None]
+    on_result: Callable[[Job, EpisodeResult], None]
 
     def _emit(self, job: Job, rec: dict[str, Any]) -> None:
+        result = EpisodeResult.from_dict(rec)
         self.stats.done += 1
-        self.stats.successes += bool(rec.get("success"))
-        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
-        self.on_result(job, rec)
+        self.stats.successes += result.success
+        self.stats.episode_wall_s += float(result.wall_s or 0.0)
+        self.on_result(job, result)
 
     def _failed(self, job: Job, error: str) -> dict[str, Any]:
         return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
@@ -208,7 +209,7 @@ class Grid(RecordSink):
     re-run alone, so crash accounting is per episode whatever the concurrency.
     """
 
-    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
+    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, EpisodeResult], None],
                  registered: Sequence[Any] = (), recycle_after: int | None = None, concurrency: int = 1,
                  max_llm_concurrency: int | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
@@ -375,7 +376,7 @@ def _describe_codes(codes: Sequence[int]) -> str:
 
 
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
-                     writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
+                     writer: ResultsWriter, progress: Callable[[EpisodeRecord], None] | None = None,
                      registered: Sequence[Any] = (), concurrency: int = 1,
                      max_llm_concurrency: int | None = None, executor: str = "local",
                      ray_address: str | None = None, stop: Callable[[], bool] | None = None) -> GridStats:
@@ -390,15 +391,15 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
 
     out_dir = Path(out_dir).resolve()
 
-    def on_result(job: Job, rec: dict[str, Any]) -> None:
-        write_calls(out_dir, rec)
-        rec["failure"] = classify(rec)
-        rrd = rec.get("rrd")
+    def on_result(job: Job, result: EpisodeResult) -> None:
+        transcript = write_calls(out_dir, result)
+        rrd = result.rrd
         if rrd:
             try:
-                rec["rrd"] = os.path.relpath(rrd, out_dir)
+                rrd = os.path.relpath(rrd, out_dir)
             except ValueError:
                 pass
+        rec = EpisodeRecord.of(replace(result, rrd=rrd, calls=()), failure=classify(result), transcript=transcript)
         writer.write(rec)
         if progress is not None:
             progress(rec)

@@ -26,6 +26,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 from capmj.bench.grid import AgentSpec, GridStats, Job, RecordSink, crash_error, init_worker, run_job
 from capmj.errors import ConfigError
+from capmj.records import EpisodeResult
 
 FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "OPENAI_API_KEY",
                  "ANTHROPIC_API_KEY", "LITELLM_LOCAL_MODEL_COST_MAP")
@@ -54,7 +55,7 @@ class EpisodeActor:
 class RayGrid(RecordSink):
     """Same contract as :class:`~capmj.bench.grid.Grid`: ``run(jobs)`` hands each record to ``on_result``."""
 
-    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
+    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, EpisodeResult], None],
                  registered: Sequence[Any] = (), concurrency: int = 1, max_llm_concurrency: int | None = None,
                  address: str | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent

@@ -2,7 +2,6 @@
 import sys, os, itertools
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from pathlib import Path
 from capmj.bench.cli import main
 from llm_stub_server import StubLLMServer
 from test_llm_chain import OBJ_NAMES, REPORTER, RIGHT_PLAN, TASK, Router, code, parse_function_answer
