@@ -17,6 +17,7 @@ import numpy as np
 
 from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
+from capmj.errors import EvaluationFailed, describe, error_facts
 from capmj.record import ArrayFrames, NullRecorder, Recorder
 from capmj.records import Drift, EpisodeResult, LLMNotes
 from capmj.sim.world import World
@@ -26,10 +27,6 @@ from capmj.tasks.protocol import Task, make_scene
 __all__ = ["FRAME_EVERY_STEPS", "EpisodeResult", "record_episode", "run_episode"]
 
 FRAME_EVERY_STEPS = 25  # 20 Hz of simulated time in logs
-
-
-def _error_text(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
 
 
 def _attach_frames(world: World, recorder: Recorder) -> None:
@@ -64,28 +61,33 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
         world = World(scene.objects)
         world.settle()
     except Exception as exc:  # noqa: BLE001 - a broken task fails its own episode only
-        rec.text("verdict", f"FAILED before acting: {_error_text(exc)}")
+        rec.text("verdict", f"FAILED before acting: {describe(exc)}")
+        kind, why = error_facts(exc)
         return EpisodeResult(name, seed, agent.name, model, False, 0.0, 0.0, 0, 0, 0.0,
-                             time.perf_counter() - t0, _error_text(exc))
+                             time.perf_counter() - t0, describe(exc), error_type=kind, error_status=why)
     if not isinstance(rec, NullRecorder):
         _attach_frames(world, rec)
         try:
             rec.attach(world)
         except Exception as exc:  # noqa: BLE001 - logging must never change the episode's outcome
-            rec.text("log_errors", f"attach failed: {_error_text(exc)}")
+            rec.text("log_errors", f"attach failed: {describe(exc)}")
     rec.text("goal", scene.goal)
     ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
-    error = None
+    error: str | None = None
+    error_type: str | None = None
+    status: str | None = None
     diags: tuple[str, ...]
     try:
         agent.act(ctx)
     except Exception as exc:  # noqa: BLE001 - recorded as this episode's failure
-        error = _error_text(exc)
+        error = describe(exc)
+        error_type, status = error_facts(exc)
     try:
         verdict = ctx.verdict()
         reward = ravens_reward(task.oracle_goals(scene), world.state())
     except Exception as exc:  # noqa: BLE001
-        error = error or f"evaluation failed: {_error_text(exc)}"
+        if error is None:
+            error, error_type = f"evaluation failed: {describe(exc)}", EvaluationFailed.__name__
         success, progress, reward, diags = False, 0.0, 0.0, ()
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
@@ -101,7 +103,7 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
                          ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags),
                          llm if isinstance(llm, LLMNotes) else None, final_poses=poses, drift=drift,
-                         calls=tuple(ctx.notes.get("llm_calls", ())))
+                         error_type=error_type, error_status=status, calls=tuple(ctx.notes.get("llm_calls", ())))
 
 
 def _oracle_goals(task: Any, seed: int) -> tuple:

@@ -43,7 +43,7 @@ from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
-from capmj.errors import ConfigError, LLMError, PlanError
+from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
 from capmj.llm.client import DEFAULT_TIMEOUT_S
 from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
@@ -246,12 +246,13 @@ class LLMAgent:
                 if llm_error is not None:
                     error = llm_error
                 else:
-                    report = Report(reporter.mode, None, "", f"reporter failed: {type(exc).__name__}: {exc}",
-                                    "unknown", (), (f"reporter failed: {type(exc).__name__}: {exc}",))
+                    report = Report(reporter.mode, None, "", f"reporter failed: {describe(exc)}",
+                                    "unknown", (), (f"reporter failed: {describe(exc)}",))
             predicate = self._predicate(ctx)  # the same state the reporter judged
         replanned = k > 1 and outcome.key is not None
         temperature = client.config.temperature  # of requests without their own
-        error_text = f"{type(error).__name__}: {error}" if error is not None else None
+        error_text = describe(error) if error is not None else None
+        error_type, error_status = error_facts(error) if error is not None else (None, None)
         told = f"plan not run: {outcome.not_run}" if outcome.not_run is not None else ""
         if error is not None:
             told = self._error_report(error, ctx)
@@ -268,6 +269,7 @@ class LLMAgent:
             error=error_text,
             error_kind=None if error is None else "llm" if isinstance(error, LLMError) else "plan",
             error_line=error.line if isinstance(error, PlanError) else None,
+            error_type=error_type, error_status=error_status,
             failed_program=failed_program(transcript, k, error_text) if error_text else None,
             api_error=api_error(error_text, api.call_log),
             verdict=report.verdict if report is not None else None,
@@ -306,7 +308,7 @@ class LLMAgent:
         return "object positions [x, y, z] after the plan:\n" + "\n".join(lines)
 
     def _error_report(self, error: BaseException, ctx: EpisodeContext) -> str:
-        head = f"the plan failed with {type(error).__name__}: {error}"
+        head = f"the plan failed with {describe(error)}"
         return head + "\n" + self._scene_summary(ctx)
 
     @staticmethod

@@ -23,14 +23,10 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from capmj.errors import BudgetExceeded, ConfigError
+from capmj.errors import ConfigError, LLMBudgetExceeded
 from capmj.records import Spend, SpendLimits
 
 __all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limits", "parse_price", "price_source"]
-
-
-class LLMBudgetExceeded(BudgetExceeded):
-    """The episode's LLM calls used more tokens or money than ``episode_max_*`` allows."""
 
 
 @dataclass(frozen=True)

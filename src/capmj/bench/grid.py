@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from capmj.bench.results import ResultsWriter, episode_key, sanitize
+from capmj.errors import InfrastructureError, WorkerCrash, WorkerError, describe, error_facts
 from capmj.records import EpisodeRecord, EpisodeResult
 
 MP_CONTEXT = "spawn"
@@ -69,9 +70,12 @@ def _safe(s: str) -> str:
     return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in str(s))
 
 
-def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, **extra: Any) -> dict[str, Any]:
-    """A result line for an episode that produced no result of its own (worker crash, bad task)."""
-    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error).to_dict()
+def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, error_type: str | None,
+                  **extra: Any) -> dict[str, Any]:
+    """A result line for an episode that produced no result of its own (worker crash, bad task);
+    ``error_type`` names the class of the failure (:mod:`capmj.errors`)."""
+    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error,
+                        error_type=error_type).to_dict()
     rec.update(extra)
     return rec
 
@@ -105,7 +109,7 @@ def init_worker(spec: AgentSpec, registered: bytes | None = None, llm_gate: Any 
                 registry.register(task, replace=True)
         _WORKER["idle"].put(_build_agent(spec))
     except Exception as exc:  # noqa: BLE001 - reported per episode instead of breaking the pool
-        _WORKER["init_error"] = f"{type(exc).__name__}: {exc}"
+        _WORKER["init_error"] = (describe(exc), error_facts(exc)[0])
 
 
 def _build_agent(spec: AgentSpec) -> Any:
@@ -128,7 +132,7 @@ def run_job(job: Job) -> dict[str, Any]:
     """Run one episode in this worker; always returns a result record (never raises for the episode)."""
     spec: AgentSpec = _WORKER["spec"]
     if "init_error" in _WORKER:
-        return failed_record(job.task, job.seed, spec.name, spec.options.get("model"), _WORKER["init_error"])
+        return failed_record(job.task, job.seed, spec.name, spec.options.get("model"), *_WORKER["init_error"])
     agent = _take_agent()
     try:
         return _run_with(agent, job, spec)
@@ -144,13 +148,13 @@ def _run_with(agent: Any, job: Job, spec: AgentSpec) -> dict[str, Any]:
 
         task = get_task(job.task)
     except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
-        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+        return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
     from capmj.runner import record_episode
 
     try:
         result = record_episode(task, job.seed, agent, job.rrd, images=spec.images)
     except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
-        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+        return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
     return sanitize(result.to_dict())
 
 
@@ -197,8 +201,9 @@ class RecordSink:
         self.stats.episode_wall_s += float(result.wall_s or 0.0)
         self.on_result(job, result)
 
-    def _failed(self, job: Job, error: str) -> dict[str, Any]:
-        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
+    def _failed(self, job: Job, error: str, error_type: type[InfrastructureError]) -> dict[str, Any]:
+        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error,
+                             error_type.__name__)
 
 
 class Grid(RecordSink):
@@ -335,7 +340,7 @@ class Grid(RecordSink):
                         broken = True
                         continue
                     except Exception as exc:  # noqa: BLE001 - e.g. a result that failed to unpickle
-                        recs = [self._failed(j, f"WorkerError: {type(exc).__name__}: {exc}") for j in batch]
+                        recs = [self._failed(j, f"WorkerError: {describe(exc)}", WorkerError) for j in batch]
                     del inflight[fut]
                     for job, rec in zip(batch, recs):
                         self._emit(job, rec)
@@ -347,7 +352,7 @@ class Grid(RecordSink):
                 if self._isolating and len(crashed) == 1:
                     job = crashed[0]
                     self.stats.crashes += 1
-                    self._emit(job, self._failed(job, crash_error(_describe_codes(codes))) | {"rrd": None})
+                    self._emit(job, self._failed(job, crash_error(_describe_codes(codes)), WorkerCrash) | {"rrd": None})
                 else:
                     self.stats.retried += len(crashed)
                     suspects.extend(crashed)

@@ -30,6 +30,9 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "error": "the plan's error ('PlanError: line 3: ...'), None when it finished",
     "error_kind": "'plan' or 'llm' (only when error is set)",
     "error_line": "line of the plan the error points at, else None",
+    "error_type": "the class of what failed (capmj.errors.error_facts: 'SandboxViolation', 'MotionFailed', "
+                  "'IndexError', ...; only when error is set)",
+    "error_status": "the failed primitive's status for a MotionFailed ('unreachable', 'no_grip', 'wrong_object')",
     "failed_program": "which program failed: 'planner' or the helper LMP's name (only when error is set)",
     "api_error": "the error the plan's last API call raised, when the attempt's error is that one ({fn, error})",
     "verdict": "the reporter's verdict: True, False, or None (unknown, no reporter, or the plan failed)",
@@ -80,6 +83,8 @@ class AttemptRecord:
     error: str | None = None
     error_kind: str | None = None
     error_line: int | None = None
+    error_type: str | None = None
+    error_status: str | None = None
     failed_program: str | None = None
     api_error: ApiError | None = None
     verdict: bool | None = None
@@ -99,8 +104,8 @@ class AttemptRecord:
     completion_tokens: int = 0
     said: tuple[str, ...] = ()
 
-    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"error_kind", "failed_program", "api_error",
-                                                         "reporter_error"})
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"error_kind", "error_type", "error_status",
+                                                         "failed_program", "api_error", "reporter_error"})
     """Keys present only with an error (or, ``reporter_error``, a reporter's own error), as written
     before records were typed."""
 

@@ -22,9 +22,10 @@ from capmj.records.notes import LLMNotes
 
 __all__ = ["SCHEMA", "Drift", "Episode", "EpisodeRecord", "EpisodeResult", "Key"]
 
-SCHEMA = "capmj.episode/1"
-"""The ``schema`` of every ``episodes.jsonl`` line this version writes; lines without one were
-written before records were typed (see :mod:`capmj.bench.migrate`)."""
+SCHEMA = "capmj.episode/2"
+"""The ``schema`` of every ``episodes.jsonl`` line this version writes.  Lines without one were
+written before records were typed; ``capmj.episode/1`` lines lack ``error_type``/``error_status``
+(see :mod:`capmj.bench.migrate`)."""
 
 Key = tuple[str, int, str, "str | None"]
 """The identity of an episode in a grid: (task, seed, agent, model)."""
@@ -53,6 +54,8 @@ class Episode:
     ``llm`` is None for agents without an LLM (written ``{}``), ``drift`` None when it could not be
     measured (written ``{}``); ``final_poses`` maps object name -> ``[x, y, z, qw, qx, qy, qz]``;
     ``calls`` are the episode's LLM calls (messages and answer, :mod:`capmj.agents.llm_meter`).
+    ``error_type`` is the class of what failed (:func:`capmj.errors.error_facts`), None without
+    an error; ``error_status`` the failed primitive's status for a ``MotionFailed``.
     """
 
     task: str
@@ -73,6 +76,8 @@ class Episode:
     rrd: str | None = None
     final_poses: dict[str, tuple[float, ...]] = dataclasses.field(default_factory=dict)
     drift: Drift | None = None
+    error_type: str | None = None
+    error_status: str | None = None
     calls: tuple[dict[str, Any], ...] = ()
 
     EMPTY_IF_NONE: ClassVar[frozenset[str]] = frozenset({"llm", "drift"})
