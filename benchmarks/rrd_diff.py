@@ -22,7 +22,8 @@ import re
 from pathlib import Path
 from typing import Any
 
-from capmj.bench.results import EPISODES, Key, episode_key, read_results
+from capmj.bench.results import EPISODES, read_records
+from capmj.records import Key
 from capmj.replay.reader import iter_chunks
 
 ROW_ID = "rerun.controls.RowId"
@@ -87,8 +88,9 @@ def _results(folder: Path) -> dict[Key, str] | None:
     p = folder / EPISODES
     if not p.is_file():
         return None
-    records, corrupt = read_results(p)
-    out = {episode_key(r): json.dumps({k: v for k, v in r.items() if k != "wall_s"}, sort_keys=True) for r in records}
+    records, corrupt = read_records(p)
+    out = {r.key: json.dumps({k: v for k, v in r.to_dict().items() if k != "wall_s"}, sort_keys=True)
+           for r in records}
     if corrupt:  # unreadable lines count as a difference unless both folders have the same number
         out[("<corrupt lines>", corrupt, "", None)] = ""
     return out

@@ -42,10 +42,10 @@ def test_reporter_answer_missing_its_first_line_still_yields_a_verdict(server: S
     assert first == "poses = get_obj_pos_dict()"
     server.respond_with(Router(planner=code("say('nothing to do')"), parse_completion=code(rest)))
     result = episode(agent(server, reporter="text"))
-    (attempt,) = result.llm["attempts"]
-    assert attempt["verdict"] is False and attempt["verdict_source"] == "code", attempt
-    assert "0 of 5 blocks in the orange zone" in attempt["reason"]
-    assert attempt["reporter_errors"] == [] and attempt["predicate"] is False
+    (attempt,) = result.llm.attempts
+    assert attempt.verdict is False and attempt.verdict_source == "code", attempt
+    assert "0 of 5 blocks in the orange zone" in attempt.reason
+    assert attempt.reporter_errors == () and attempt.predicate is False
     assert len(requests_of(server, "parse_completion")) == 1  # no repair was needed
 
 
@@ -54,28 +54,28 @@ def test_reporter_code_failing_twice_falls_back_to_a_direct_verdict(server: Stub
     server.respond_with(Router(planner=code("say('nothing to do')"), parse_completion=code(broken),
                                reporter_direct="Looking at the poses:\n" + code(JUDGE_FALSE)))
     result = episode(agent(server, reporter="text"))
-    (attempt,) = result.llm["attempts"]
-    assert attempt["verdict"] is False and attempt["verdict_source"] == "direct", attempt
-    assert attempt["wrong"] == ["movable small cyan block with obj_id 3"]
-    assert [e.split(":")[0] for e in attempt["reporter_errors"]] == ["code", "repair"]
-    assert "name 'limit' is not defined" in attempt["reporter_errors"][0]
+    (attempt,) = result.llm.attempts
+    assert attempt.verdict is False and attempt.verdict_source == "direct", attempt
+    assert attempt.wrong == ("movable small cyan block with obj_id 3",)
+    assert [e.split(":")[0] for e in attempt.reporter_errors] == ["code", "repair"]
+    assert "name 'limit' is not defined" in attempt.reporter_errors[0]
     checks = requests_of(server, "parse_completion")
     assert len(checks) == 2
     repair = checks[1]["messages"][-1]["content"]  # the error and the failing line go back to the model
     assert "name 'limit' is not defined" in repair and "line 3: judge = height > limit" in repair
     direct = requests_of(server, "reporter_direct")[0]["messages"][-1]["content"]
     assert "movable small cyan block with obj_id 3: centre [" in direct and result.goal in direct
-    assert attempt["predicate"] is False  # the direct verdict agreed with the predicate
+    assert attempt.predicate is False  # the direct verdict agreed with the predicate
 
 
 def test_vlm_reporter_gets_the_same_fallback(server: StubLLMServer) -> None:
     server.respond_with(Router(planner=code("say('nothing to do')"), vlm_reporter="It looks done to me.",
                                reporter_direct=code(JUDGE_FALSE)))
     result = episode(agent(server, reporter="vlm"))
-    (attempt,) = result.llm["attempts"]
-    assert attempt["verdict"] is False and attempt["verdict_source"] == "direct", attempt
+    (attempt,) = result.llm.attempts
+    assert attempt.verdict is False and attempt.verdict_source == "direct", attempt
     vlm = requests_of(server, "vlm_reporter")
-    if attempt["reporter_errors"][0].startswith("code: no images"):
+    if attempt.reporter_errors[0].startswith("code: no images"):
         assert vlm == []  # no OpenGL renderer here: straight to the direct verdict
     else:
         assert len(vlm) == 2 and "gave no verdict" in vlm[1]["messages"][-1]["content"]
@@ -89,16 +89,16 @@ def test_unknown_verdict_replans_or_stops(server: StubLLMServer, policy: str) ->
     server.respond_with(Router(planner=planner_sequence("say('plan one')", "say('plan two')"),
                                parse_completion="I am not sure.", reporter_direct="Hard to say."))
     result = episode(agent(server, reporter="text", attempts=2, on_unknown=policy))
-    attempts = result.llm["attempts"]
-    assert attempts[0]["verdict"] is None and attempts[0]["verdict_source"] == "unknown"
-    assert attempts[0]["on_unknown"] == policy and result.llm["on_unknown"] == policy
+    attempts = result.llm.attempts
+    assert attempts[0].verdict is None and attempts[0].verdict_source == "unknown"
+    assert attempts[0].on_unknown == policy and result.llm.on_unknown == policy
     if policy == "replan":
-        assert len(attempts) == 2 and result.llm["stopped"] == "attempts used up"
+        assert len(attempts) == 2 and result.llm.stopped == "attempts used up"
         assert len(requests_of(server, "planner")) == 2
         replan = requests_of(server, "planner")[1]["messages"][-1]["content"]
         assert "goal UNKNOWN" in replan
     else:
-        assert len(attempts) == 1 and result.llm["stopped"] == "reporter: unknown"
+        assert len(attempts) == 1 and result.llm.stopped == "reporter: unknown"
         assert len(requests_of(server, "planner")) == 1
 
 
@@ -117,15 +117,15 @@ def test_identical_replans_are_asked_again_hotter_with_deterministic_seeds(serve
         return result, requests_of(server, "planner")
 
     result, planner = run()
-    first, second = result.llm["attempts"]
+    first, second = result.llm.attempts
     assert len(planner) == 4  # attempt 1, then attempt 2's request and its 2 retries
     assert [r["temperature"] for r in planner] == [0.0, 0.4, 0.7, 1.0]
     seeds = [r.get("seed") for r in planner]
     assert seeds[0] is None and all(isinstance(s, int) for s in seeds[1:]) and len(set(seeds[1:])) == 3
-    assert (first["temperatures"], first["seeds"], first["extra_requests"]) == ([0.0], [None], 0)
-    assert (second["temperatures"], second["seeds"], second["extra_requests"]) == ([0.4, 0.7, 1.0], seeds[1:], 2)
-    assert (second["code_differs"], second["identical_to"], second["not_run"]) == (True, None, None)
-    assert second["said"] == ["plan B"] and "plan B" in second["code"]  # the different plan ran
+    assert (first.temperatures, first.seeds, first.extra_requests) == ((0.0,), (None,), 0)
+    assert (second.temperatures, second.seeds, second.extra_requests) == ((0.4, 0.7, 1.0), tuple(seeds[1:]), 2)
+    assert (second.code_differs, second.identical_to, second.not_run) == (True, None, None)
+    assert second.said == ("plan B",) and "plan B" in second.code  # the different plan ran
     # the first retry shows the failure again in the conversation and asks for changed lines
     text = planner[2]["messages"][-1]["content"]
     assert "identical to the plan of attempt 1" in text and "the blocks are not stacked" in text
@@ -148,19 +148,19 @@ def test_plan_still_identical_after_the_retries_is_not_run(server: StubLLMServer
     plan_a = f"put_first_on_second('{block}', 'fixed orange zone with obj_id 1')\nsay('plan A ran')"
     server.respond_with(Router(planner=code(plan_a), parse_completion=code(JUDGE_FALSE)))
     result = episode(agent(server, reporter="text", attempts=2, replan_temperature=0.7, replan_retries=2))
-    first, second = result.llm["attempts"]
+    first, second = result.llm.attempts
     planner = requests_of(server, "planner")
     assert len(planner) == 4 and [r["temperature"] for r in planner] == [0.0, 0.7, 1.0, 1.3]
-    assert first["primitives"] == 1 and first["said"] == ["plan A ran"] and first["predicate_progress"] > 0
-    assert second["not_run"] == "identical to attempt 1 after 2 retries; not re-run"
-    assert (second["code_differs"], second["identical_to"], second["extra_requests"]) == (False, 1, 2)
-    assert second["error"] is None and second["verdict_source"] is None  # failed, but neither raised nor judged
-    assert second["primitives"] == 0 and second["said"] == [] and second["api_calls"] == 0  # the sandbox never ran it
-    assert "put_first_on_second" in second["code"] and second["report"] == f"plan not run: {second['not_run']}"
+    assert first.primitives == 1 and first.said == ("plan A ran",) and first.predicate_progress > 0
+    assert second.not_run == "identical to attempt 1 after 2 retries; not re-run"
+    assert (second.code_differs, second.identical_to, second.extra_requests) == (False, 1, 2)
+    assert second.error is None and second.verdict_source is None  # failed, but neither raised nor judged
+    assert second.primitives == 0 and second.said == () and second.api_calls == 0  # the sandbox never ran it
+    assert "put_first_on_second" in second.code and second.report == f"plan not run: {second.not_run}"
     assert len(requests_of(server, "parse_completion")) == 1  # only attempt 1 was judged
-    assert result.llm["stopped"] == "attempts used up" and result.error is None
+    assert result.llm.stopped == "attempts used up" and result.error is None
     # the episode ends where plan A ended (as re-running it from the reset scene would), not in the initial scene
-    assert result.progress == first["predicate_progress"] and result.primitives == 1
+    assert result.progress == first.predicate_progress and result.primitives == 1
 
 
 def test_attempt_after_a_plan_not_run_replans_from_the_last_plan_that_ran(server: StubLLMServer) -> None:
@@ -168,17 +168,17 @@ def test_attempt_after_a_plan_not_run_replans_from_the_last_plan_that_ran(server
     server.respond_with(Router(planner=planner_sequence(same, same, same, same, other),
                                parse_completion=code(JUDGE_FALSE)))
     result = episode(agent(server, reporter="text", attempts=3, replan_retries=1))
-    first, second, third = result.llm["attempts"]
+    first, second, third = result.llm.attempts
     planner = requests_of(server, "planner")
     assert len(planner) == 5  # 1 + (1 + 1 retry, not run) + (1 + 1 retry)
-    assert second["not_run"] == "identical to attempt 1 after 1 retries; not re-run"
-    assert (third["not_run"], third["code_differs"], third["extra_requests"], third["said"]) == (None, True, 1, ["plan C"])
+    assert second.not_run == "identical to attempt 1 after 1 retries; not re-run"
+    assert (third.not_run, third.code_differs, third.extra_requests, third.said) == (None, True, 1, ("plan C",))
     # attempt 3 is shown attempt 1's plan and failure, and samples with seeds of its own
     assert planner[3]["messages"][-1]["content"] == planner[1]["messages"][-1]["content"]
     assert "(attempt 1) ran from the initial scene" in planner[3]["messages"][-1]["content"]
     assert len({r["seed"] for r in planner[1:]}) == 4
     assert [r["temperature"] for r in planner] == [0.0, 0.7, 1.0, 0.7, 1.0]
-    assert (second["code_differs"], third["identical_to"]) == (False, None)
+    assert (second.code_differs, third.identical_to) == (False, None)
 
 
 def test_replan_sampling_schedule() -> None:
@@ -196,8 +196,8 @@ def test_replan_prompt_shows_the_numbered_plan_and_the_failing_line(server: Stub
     failing = "blocks = get_obj_names()\nn = len(blocks)\nz = get_obj_pos('the purple thing')\nsay(n)"
     server.respond_with(Router(planner=planner_sequence(failing, "say('fixed')")))
     result = episode(agent(server, attempts=2))
-    first, second = result.llm["attempts"]
-    assert first["error_line"] == 3 and "unknown object" in first["error"]
+    first, second = result.llm.attempts
+    assert first.error_line == 3 and "unknown object" in first.error
     replan = requests_of(server, "planner")[1]["messages"]
     assert replan[2] == {"role": "assistant", "content": code(failing)}
     text = replan[-1]["content"]
@@ -205,7 +205,7 @@ def test_replan_prompt_shows_the_numbered_plan_and_the_failing_line(server: Stub
         assert f"# {i}| {line}" in text
     assert "# It failed at line 3: z = get_obj_pos('the purple thing')" in text
     assert "unknown object" in text and "Write a corrected complete plan" in text
-    assert second["error"] is None and second["code_differs"] is True
+    assert second.error is None and second.code_differs is True
 
 
 # ------------------------------------------------------------------------------------------------

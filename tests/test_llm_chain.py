@@ -187,16 +187,16 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
     assert result.error is None
     assert result.attempts == 2 and result.primitives == 10  # 5 + 5: the old plan was not re-run
     llm = result.llm
-    first, second = llm["attempts"]
-    assert first["verdict"] is False and first["error"] is None and "0 of 5" in first["report"]
-    assert second["verdict"] is True and second["reset"] is True and second["primitives"] == 5
-    assert "pick_zone" in second["code"] and "def zones_of_color" in second["code"]  # synthesised
-    assert second["said"] == ["stacked in the orange zone"]
-    assert llm["stopped"] == "reporter: achieved"
+    first, second = llm.attempts
+    assert first.verdict is False and first.error is None and "0 of 5" in first.report
+    assert second.verdict is True and second.reset is True and second.primitives == 5
+    assert "pick_zone" in second.code and "def zones_of_color" in second.code  # synthesised
+    assert second.said == ("stacked in the orange zone",)
+    assert llm.stopped == "reporter: achieved"
     # planner, parse_obj_name, parse_function x2, parse_completion per attempt
     assert router.seen == ["planner", "parse_function", "parse_function", "parse_obj_name", "parse_completion"] * 2
-    assert llm["calls"] == 10 == len(server.requests) and llm["cached_calls"] == 0
-    assert llm["prompt_tokens"] > 0 and llm["completion_tokens"] > 0
+    assert llm.calls == 10 == len(server.requests) and llm.cached_calls == 0
+    assert llm.prompt_tokens > 0 and llm.completion_tokens > 0
     # the re-plan carried the old plan and the failure report, then asked for a new plan
     replan = server.requests[5]["messages"]
     assert [m["role"] for m in replan] == ["system", "user", "assistant", "user"]
@@ -213,11 +213,11 @@ def test_failed_attempt_is_judged_reset_and_replanned_to_success(server: StubLLM
     assert "put_first_on_second" in rec.texts["llm/attempt1/api_calls"][0]
     assert rec.texts["llm/attempt1/verdict"] == ["not achieved (reporter verdict from code; task predicate: False)"]
     # per attempt: where the verdict came from, the predicate on the same state, whether the plan changed
-    assert (first["verdict_source"], first["predicate"], first["code_differs"]) == ("code", False, None)
-    assert (second["verdict_source"], second["predicate"], second["code_differs"]) == ("code", True, True)
-    assert first["temperatures"] == [0.0] and second["temperatures"] == [0.7]
-    assert first["seeds"] == [None] and isinstance(second["seeds"][0], int)
-    assert "seed" not in server.requests[0] and server.requests[5]["seed"] == second["seeds"][0]
+    assert (first.verdict_source, first.predicate, first.code_differs) == ("code", False, None)
+    assert (second.verdict_source, second.predicate, second.code_differs) == ("code", True, True)
+    assert first.temperatures == (0.0,) and second.temperatures == (0.7,)
+    assert first.seeds == (None,) and isinstance(second.seeds[0], int)
+    assert "seed" not in server.requests[0] and server.requests[5]["seed"] == second.seeds[0]
 
 
 def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:
@@ -236,7 +236,7 @@ def test_helper_lmp_results_are_used_by_the_plan(server: StubLLMServer) -> None:
     name_call = a.transcript[3]
     assert "movable small cyan block with obj_id 3" in (name_call.result or "")
     assert [c.lmp for c in a.transcript] == lmps
-    assert result.llm["stopped"] == "plan finished"
+    assert result.llm.stopped == "plan finished"
 
 
 # ------------------------------------------------------------------------------------------------
@@ -263,8 +263,8 @@ def test_malformed_completion_ends_the_attempt_with_a_recorded_error(server: Stu
     assert not result.success
     assert result.error is not None and result.error.startswith(("PlanError", "BudgetExceeded")), result.error
     assert message in result.error, result.error
-    (attempt,) = result.llm["attempts"]
-    assert attempt["error_kind"] == "plan" and message in attempt["error"]
+    (attempt,) = result.llm.attempts
+    assert attempt.error_kind == "plan" and message in attempt.error
     assert result.primitives == 0
     assert message in rec.texts["llm/attempt1/error"][0]
     assert len(server.requests) == 1
@@ -281,8 +281,8 @@ def test_code_error_is_followed_by_a_replan_with_the_error(server: StubLLMServer
                                parse_function=parse_function_answer))
     result = episode(agent(server, attempts=2))
     assert result.success and result.error is None and result.attempts == 2
-    first, second = result.llm["attempts"]
-    assert "SyntaxError" in first["error"] and second["error"] is None
+    first, second = result.llm.attempts
+    assert "SyntaxError" in first.error and second.error is None
 
 
 def test_function_synthesis_depth_is_bounded(server: StubLLMServer) -> None:
@@ -310,9 +310,9 @@ def test_provider_failure_is_retried_then_recorded(server: StubLLMServer, failur
     assert not result.success
     assert result.error is not None and result.error.startswith("LLMError"), result.error
     assert len(server.requests) == 3  # 1 call + 2 retries, then no further attempt
-    (attempt,) = result.llm["attempts"]
-    assert attempt["error_kind"] == "llm" and result.llm["stopped"] == "llm error"
-    assert result.llm["failed_calls"] == 1 and result.primitives == 0
+    (attempt,) = result.llm.attempts
+    assert attempt.error_kind == "llm" and result.llm.stopped == "llm error"
+    assert result.llm.failed_calls == 1 and result.primitives == 0
 
 
 def test_provider_failure_inside_a_helper_lmp_ends_the_attempts(server: StubLLMServer) -> None:
@@ -320,7 +320,7 @@ def test_provider_failure_inside_a_helper_lmp_ends_the_attempts(server: StubLLMS
                                parse_obj_name=Reply.error(500, "down")))
     result = episode(agent(server, attempts=3, max_retries=1))
     assert result.error is not None and result.error.startswith("LLMError")
-    assert len(result.llm["attempts"]) == 1 and result.llm["attempts"][0]["error_kind"] == "llm"
+    assert len(result.llm.attempts) == 1 and result.llm.attempts[0].error_kind == "llm"
 
 
 # ------------------------------------------------------------------------------------------------
@@ -330,16 +330,16 @@ def test_rerun_from_the_disk_cache_makes_no_http_calls(server: StubLLMServer, tm
     server.respond_with(full_router())
     first = episode(agent(server, reporter="text", attempts=2, cache_dir=tmp_path))
     # identical helper questions of attempt 2 are already answered from the cache
-    assert first.success and first.llm["calls"] == 10 and first.llm["cached_calls"] == 3
+    assert first.success and first.llm.calls == 10 and first.llm.cached_calls == 3
     assert len(server.requests) == 7
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     again = episode(agent(server, reporter="text", attempts=2, cache_dir=tmp_path))
     assert len(server.requests) == 0
-    assert again.llm["cached_calls"] == again.llm["calls"] == 10 and again.llm["cost_usd"] == 0
+    assert again.llm.cached_calls == again.llm.calls == 10 and again.llm.cost_usd == 0
     same = ("success", "progress", "reward", "primitives", "attempts", "error", "sim_s", "diagnostics")
     assert {k: getattr(again, k) for k in same} == {k: getattr(first, k) for k in same}
-    strip = lambda r: [{k: v for k, v in a.items()} for a in r.llm["attempts"]]  # noqa: E731
+    strip = lambda r: [a.to_dict() for a in r.llm.attempts]  # noqa: E731
     assert strip(again) == strip(first)
 
 
@@ -362,11 +362,11 @@ def test_vlm_reporter_sends_images_and_parses_the_verdict_from_code(server: Stub
                                    "judge = False\nreason = 'the blocks are not stacked'")))
     rec = MemoryRecorder()
     result = episode(agent(server, reporter="vlm"), rec)
-    (attempt,) = result.llm["attempts"]
-    if any("no images" in e for e in attempt["reporter_errors"]):
-        pytest.skip(f"no OpenGL renderer: {attempt['reporter_errors']}")
-    assert attempt["verdict"] is False and "not stacked" in attempt["report"]
-    assert attempt["verdict_source"] == "code" and attempt["predicate"] is True  # a false negative
+    (attempt,) = result.llm.attempts
+    if any("no images" in e for e in attempt.reporter_errors):
+        pytest.skip(f"no OpenGL renderer: {attempt.reporter_errors}")
+    assert attempt.verdict is False and "not stacked" in attempt.report
+    assert attempt.verdict_source == "code" and attempt.predicate is True  # a false negative
     assert result.success  # the predicate judges the scene, the reporter only drives re-planning
     vlm = [r for r in server.requests if lmp_of(r) == "vlm_reporter"]
     assert len(vlm) == 1

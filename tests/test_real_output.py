@@ -89,7 +89,7 @@ WORKER = textwrap.dedent("""
     from capmj.tasks.registry import get_task
     agent = LLMAgent("openai/stub", api_base=sys.argv[1], backoff_s=0.0, timeout_s=30.0)
     result = run_episode(get_task("stack-all-blocks-on-a-zone"), 10001, agent)
-    print(json.dumps({"error": result.error, "said": result.llm["attempts"][0]["said"],
+    print(json.dumps({"error": result.error, "said": list(result.llm.attempts[0].said),
                       "primitives": result.primitives, "progress": result.progress, "sim_s": result.sim_s}))
 """)
 
@@ -114,7 +114,7 @@ def test_a_plan_iterating_a_set_gives_the_same_final_state_in_two_processes(serv
     assert proc.returncode == 0, proc.stderr[-2000:]
     worker = json.loads(proc.stdout.strip().splitlines()[-1])
     result = episode(agent(server))
-    local = {"error": result.error, "said": result.llm["attempts"][0]["said"], "primitives": result.primitives,
+    local = {"error": result.error, "said": list(result.llm.attempts[0].said), "primitives": result.primitives,
              "progress": result.progress, "sim_s": result.sim_s}
     # sets in LLM code iterate in insertion order, so the same tower is built in both processes
     assert local == worker
@@ -135,14 +135,14 @@ def test_np_random_replays_identically_from_the_cache(server: StubLLMServer, tmp
     rec1 = MemoryRecorder()
     first = episode(agent(server, cache_dir=tmp_path), rec1)
     assert first.error is None and first.primitives == 1
-    said = first.llm["attempts"][0]["said"]
+    said = first.llm.attempts[0].said
     assert len(server.requests) == 1
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     rec2 = MemoryRecorder()
     again = episode(agent(server, cache_dir=tmp_path, cache_only=True), rec2)
-    assert len(server.requests) == 0 and again.llm["cached_calls"] == 1
-    assert again.llm["attempts"][0]["said"] == said
+    assert len(server.requests) == 0 and again.llm.cached_calls == 1
+    assert again.llm.attempts[0].said == said
     assert rec2.texts["llm/attempt1/api_calls"] == rec1.texts["llm/attempt1/api_calls"]
     assert (again.success, again.progress, again.sim_s) == (first.success, first.progress, first.sim_s)
 
@@ -152,7 +152,7 @@ def test_cache_only_with_a_missing_entry_fails_the_episode_without_http(server: 
     plan = "blocks = parse_obj_name('the blocks')\nsay(str(len(blocks)))"
     plan_only(server, plan, parse_obj_name=code(OBJ_NAMES))
     first = episode(agent(server, cache_dir=tmp_path))
-    assert first.error is None and first.llm["attempts"][0]["said"] == ["5"]
+    assert first.error is None and first.llm.attempts[0].said == ("5",)
     entries = sorted(tmp_path.rglob("*.json"))
     assert len(entries) == 2
     (helper,) = [p for p in entries if "ret_val" in json.loads(p.read_text())["text"]]
@@ -163,7 +163,7 @@ def test_cache_only_with_a_missing_entry_fails_the_episode_without_http(server: 
     assert len(server.requests) == 0
     assert again.error is not None and again.error.startswith("LLMError: cache-only: no cached completion "
                                                                "for parse_obj_name#1"), again.error
-    assert again.llm["stopped"] == "llm error" and len(again.llm["attempts"]) == 1
+    assert again.llm.stopped == "llm error" and len(again.llm.attempts) == 1
 
 
 # ------------------------------------------------------------------------------------------------
@@ -191,7 +191,7 @@ def test_parse_function_cannot_redefine_the_api(server: StubLLMServer) -> None:
     written = code("def get_obj_pos(obj):\n    return [0, 0, 0]\n\ndef lift(obj):\n    return get_obj_pos(obj)")
     plan_only(server, f"say(str(lift({CYAN!r})[2] > 0.0))", parse_function=written)
     result = episode(agent(server))
-    assert result.error is None and result.llm["attempts"][0]["said"] == ["True"]  # the real get_obj_pos
+    assert result.error is None and result.llm.attempts[0].said == ("True",)  # the real get_obj_pos
 
 
 def test_wrong_call_of_an_api_function_shows_how_to_call_it(server: StubLLMServer) -> None:
@@ -214,7 +214,7 @@ say(str(all(kinds) and isinstance(Point(0, 0), Point) and pick in names))
     plan_only(server, plan)
     rec = MemoryRecorder()
     result = episode(agent(server), rec)
-    assert result.error is None and result.llm["attempts"][0]["said"] == ["True"]
+    assert result.error is None and result.llm.attempts[0].said == ("True",)
     assert "from shapely.geometry import *" in rec.texts["llm/attempt1/planner/1/removed_imports"][0]
 
 

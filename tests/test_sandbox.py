@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from capmj.agents.sandbox import SandboxBudget, check_code, extract_code, run_code
-from capmj.errors import BudgetExceeded, PlanError
+from capmj.errors import BudgetExceeded, PlanError, SandboxViolation
 
 FAST = SandboxBudget(wall_s=0.3, max_api_calls=50)
 
@@ -104,7 +104,7 @@ def test_forbidden_code_is_rejected_before_running(line: str, message: str) -> N
     code = f"x = np.zeros(3)\nget_obj_pos('red block')\n{line}\n"
     with pytest.raises(PlanError) as info:
         run(code, robot.env())
-    assert type(info.value) is PlanError
+    assert type(info.value) is SandboxViolation  # the kind is the class (its text still says PlanError)
     assert info.value.line == 3 or (line.startswith("def g") and info.value.line == 4)
     assert message in str(info.value) and "SandboxViolation: " in str(info.value)
     assert robot.calls == []  # nothing ran

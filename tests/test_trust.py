@@ -18,6 +18,7 @@ from capmj.agents.llm_agent import LLMAgent
 from capmj.agents.sandbox import SandboxBudget
 from capmj.bench.cli import main
 from capmj.bench.failures import LABELS, classify
+from capmj.bench.migrate import load_record
 from capmj.bench.stats import mcnemar_exact, paired_comparison
 from capmj.runner import run_episode
 from capmj.tasks.registry import get_task
@@ -41,8 +42,8 @@ def label_of(server: StubLLMServer, planner: Any, **kw: Any) -> tuple[str | None
     kw.setdefault("backoff_s", 0.0)
     kw.setdefault("timeout_s", 10.0)
     agent = LLMAgent("openai/stub", api_base=server.base_url, **kw)
-    rec = run_episode(get_task(TASK), SEED, agent).to_dict()
-    return classify(rec), rec
+    result = run_episode(get_task(TASK), SEED, agent)
+    return classify(result), result.to_dict()
 
 
 # ------------------------------------------------------------------------------------------------
@@ -142,10 +143,10 @@ def test_mcnemar_exact_matches_hand_computation(b: int, c: int, p: float) -> Non
 def test_paired_comparison_counts_only_common_pairs() -> None:
     recs = []
     for seed in range(8):  # A wins on 6 seeds, B on 1, one tie; seed 99 only A ran
-        recs.append({"task": "t", "seed": seed, "cfg": "A", "success": seed != 7})
-        recs.append({"task": "t", "seed": seed, "cfg": "B", "success": seed == 7})
-    recs.append({"task": "t", "seed": 99, "cfg": "A", "success": True})
-    cmp = paired_comparison(recs, lambda r: r["cfg"], "A", "B")
+        recs.append(load_record({"task": "t", "seed": seed, "agent": "A", "success": seed != 7}))
+        recs.append(load_record({"task": "t", "seed": seed, "agent": "B", "success": seed == 7}))
+    recs.append(load_record({"task": "t", "seed": 99, "agent": "A", "success": True}))
+    cmp = paired_comparison(recs, lambda r: r.agent, "A", "B")
     o = cmp["overall"]
     assert (o["n"], o["only_a"], o["only_b"], cmp["unpaired"]) == (8, 7, 1, 1)
     assert o["p_value"] == pytest.approx(2 * (1 + 8) / 2 ** 8) and not o["significant"]
@@ -215,15 +216,17 @@ def test_unknown_price_is_unknown_and_cannot_cap_cost(stub: StubLLMServer, tmp_p
     assert "price" in capsys.readouterr().err
     from capmj.bench.spend import usage
 
-    recs = [{"llm": {"spend": {"calls": 1, "tokens": 10, "cost_usd": None}}},
-            {"llm": {"spend": {"calls": 1, "tokens": 5, "cost_usd": 0.5}}}]
+    recs = [load_record({"task": "t", "seed": s, "agent": "llm", "llm": {"spend": spend}})
+            for s, spend in enumerate([{"calls": 1, "tokens": 10, "cost_usd": None},
+                                       {"calls": 1, "tokens": 5, "cost_usd": 0.5}])]
     assert usage(recs)["cost_usd"] is None and usage(recs)["tokens"] == 15
 
 
 def test_run_budget_counts_the_whole_folder() -> None:
     from capmj.bench.spend import BudgetTracker, RunBudget
 
-    ep = {"llm": {"spend": {"calls": 2, "tokens": 600, "cost_usd": 0.25}}}
+    ep = load_record({"task": "t", "seed": 1, "agent": "llm",
+                      "llm": {"spend": {"calls": 2, "tokens": 600, "cost_usd": 0.25}}})
     tracker = BudgetTracker(RunBudget.resolve(None, None, {"max_tokens": 1000}), [ep])  # stored limit
     assert not tracker.stop()
     tracker.add(ep)

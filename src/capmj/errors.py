@@ -3,17 +3,39 @@
 Every error capmj raises on purpose derives from :class:`CapmjError`, so a benchmark runner can
 record "ErrorClass: message" for one episode and go on with the next without catching unrelated
 bugs by accident.
+
+A kind of failure is a class, not a message prefix: an episode records the class of what went
+wrong (:func:`error_facts`: ``error_type`` and, for a motion, its ``status``), and failure
+attribution (:mod:`capmj.bench.failures`) switches on that class.  Classes that were introduced
+after their failures were already raised under a more general class keep that class's name in
+their text (``shown_as``; see :func:`describe`): the text is what the LLM is shown on a re-plan,
+what cached completions were asked with and what published records hold, so a new class must not
+change a single character of it.
 """
 
 from __future__ import annotations
+
+import builtins
+from typing import ClassVar
 
 
 class CapmjError(Exception):
     """Base of every deliberate capmj error."""
 
+    shown_as: ClassVar[str | None] = None
+    """The class name this error's text shows (None: its own name)."""
+
+    def __repr__(self) -> str:
+        return f"{error_name(self)}({', '.join(map(repr, self.args))})"
+
 
 class ConfigError(CapmjError, ValueError):
     """Bad user input: unknown name, malformed range, unwritable folder.  Names the valid choices."""
+
+
+class RecordError(CapmjError, ValueError):
+    """A stored record (a line of ``episodes.jsonl``, an attempt) does not match its schema: an
+    unknown or missing key, or a value of the wrong type.  Names the record type and the key."""
 
 
 class SimError(CapmjError):
@@ -53,8 +75,49 @@ class PlanError(AgentError):
         self.code = code
 
 
+class NoCodeError(PlanError):
+    """An LLM answer held no code to run (prose only, or an empty code block)."""
+
+    shown_as = "PlanError"
+
+
+class PlanSyntaxError(PlanError):
+    """LLM-written code does not parse (or compile)."""
+
+    shown_as = "PlanError"
+
+
+class SandboxViolation(PlanError):
+    """LLM-written code uses what the sandbox does not allow (imports, private attributes, ...)."""
+
+    shown_as = "PlanError"
+
+
 class BudgetExceeded(PlanError):
     """LLM code used more wall time, API calls or simulation steps than its budget."""
+
+
+class LLMBudgetExceeded(BudgetExceeded):
+    """The episode's LLM calls used more tokens or money than ``episode_max_*`` allows."""
+
+
+class MotionFailed(AgentError, RuntimeError):
+    """A pick-and-place the plan asked for did not happen: ``status`` is the primitive's
+    (``unreachable``, ``no_grip``; ``wrong_object`` when it picked another object than asked).
+    A ``RuntimeError`` too, as plan code written against the original API catches it."""
+
+    shown_as = "RuntimeError"
+
+    def __init__(self, message: str, *, status: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class UnknownObjectError(AgentError, ValueError):
+    """Plan code named an object (or obj_id) the scene does not have.  A ``ValueError`` too, as it
+    always was."""
+
+    shown_as = "ValueError"
 
 
 class LLMError(AgentError):
@@ -66,3 +129,55 @@ class LLMError(AgentError):
     def __init__(self, message: str, *, partial: str | None = None) -> None:
         super().__init__(message)
         self.partial = partial
+
+
+class InfrastructureError(CapmjError):
+    """The episode could not be run or judged through no fault of the agent (recorded by name;
+    the benchmark attributes these to ``infrastructure``)."""
+
+
+class WorkerCrash(InfrastructureError):
+    """The worker process died running the episode, twice (the second time running it alone)."""
+
+
+class WorkerError(InfrastructureError):
+    """The worker's result could not be returned (e.g. it failed to unpickle)."""
+
+
+class EvaluationFailed(InfrastructureError):
+    """The task's evaluation raised on the final state."""
+
+
+def error_name(exc: BaseException) -> str:
+    """The class name an error's text shows (``shown_as``, else its class's name)."""
+    return getattr(type(exc), "shown_as", None) or type(exc).__name__
+
+
+def describe(exc: BaseException) -> str:
+    """``"ErrorClass: message"``, the one form in which errors are recorded and shown to the LLM."""
+    return f"{error_name(exc)}: {exc}"
+
+
+def error_facts(exc: BaseException) -> tuple[str, str | None]:
+    """``(error_type, status)`` of an error: the class name of what really happened, and its
+    ``status`` when it has one (:class:`MotionFailed`).
+
+    The sandbox re-raises what plan code or an API function raised as a located PlanError *from*
+    it, so below a PlanError the ``__cause__`` chain is followed to its end.  Other errors are
+    taken as they are (an LLMError's cause is the provider library's own exception).
+    """
+    root, seen = exc, {id(exc)}
+    while isinstance(root, PlanError) and root.__cause__ is not None and id(root.__cause__) not in seen:
+        root = root.__cause__
+        seen.add(id(root))
+    status = getattr(root, "status", None)
+    return type(root).__name__, status if isinstance(status, str) else None
+
+
+def error_class(name: str | None) -> type[BaseException] | None:
+    """The class a recorded ``error_type`` names: a class of this module or a built-in exception;
+    None for any other (a third-party error, or no error)."""
+    if not name:
+        return None
+    cls = globals().get(name) or getattr(builtins, name, None)
+    return cls if isinstance(cls, type) and issubclass(cls, BaseException) else None

@@ -9,7 +9,7 @@ explained failed result, so a benchmark grid always completes.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -17,46 +17,16 @@ import numpy as np
 
 from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
+from capmj.errors import EvaluationFailed, describe, error_facts
 from capmj.record import ArrayFrames, NullRecorder, Recorder
+from capmj.records import Drift, EpisodeResult, LLMNotes
 from capmj.sim.world import World
 from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import Task, make_scene
 
+__all__ = ["FRAME_EVERY_STEPS", "EpisodeResult", "record_episode", "run_episode"]
+
 FRAME_EVERY_STEPS = 25  # 20 Hz of simulated time in logs
-
-
-@dataclass(frozen=True)
-class EpisodeResult:
-    """Everything a results table needs about one episode (one line of ``episodes.jsonl``)."""
-
-    task: str
-    seed: int
-    agent: str
-    model: str | None
-    success: bool
-    progress: float
-    reward: float
-    primitives: int
-    attempts: int
-    sim_s: float
-    wall_s: float
-    error: str | None
-    goal: str = ""
-    diagnostics: tuple[str, ...] = ()
-    llm: dict[str, Any] = field(default_factory=dict)
-    rrd: str | None = None
-    final_poses: dict[str, list[float]] = field(default_factory=dict)  # name -> [x, y, z, qw, qx, qy, qz]
-    drift: dict[str, Any] = field(default_factory=dict)  # see capmj.agents.attribution.placement_drift
-    calls: list[dict[str, Any]] = field(default_factory=list)  # LLM calls (messages + answer), see llm_meter
-
-    def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["diagnostics"] = list(self.diagnostics)
-        return d
-
-
-def _error_text(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
 
 
 def _attach_frames(world: World, recorder: Recorder) -> None:
@@ -91,41 +61,49 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
         world = World(scene.objects)
         world.settle()
     except Exception as exc:  # noqa: BLE001 - a broken task fails its own episode only
-        rec.text("verdict", f"FAILED before acting: {_error_text(exc)}")
+        rec.text("verdict", f"FAILED before acting: {describe(exc)}")
+        kind, why = error_facts(exc)
         return EpisodeResult(name, seed, agent.name, model, False, 0.0, 0.0, 0, 0, 0.0,
-                             time.perf_counter() - t0, _error_text(exc))
+                             time.perf_counter() - t0, describe(exc), error_type=kind, error_status=why)
     if not isinstance(rec, NullRecorder):
         _attach_frames(world, rec)
         try:
             rec.attach(world)
         except Exception as exc:  # noqa: BLE001 - logging must never change the episode's outcome
-            rec.text("log_errors", f"attach failed: {_error_text(exc)}")
+            rec.text("log_errors", f"attach failed: {describe(exc)}")
     rec.text("goal", scene.goal)
     ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
-    error = None
+    error: str | None = None
+    error_type: str | None = None
+    status: str | None = None
     diags: tuple[str, ...]
     try:
         agent.act(ctx)
     except Exception as exc:  # noqa: BLE001 - recorded as this episode's failure
-        error = _error_text(exc)
+        error = describe(exc)
+        error_type, status = error_facts(exc)
     try:
         verdict = ctx.verdict()
         reward = ravens_reward(task.oracle_goals(scene), world.state())
     except Exception as exc:  # noqa: BLE001
-        error = error or f"evaluation failed: {_error_text(exc)}"
+        if error is None:
+            error, error_type = f"evaluation failed: {describe(exc)}", EvaluationFailed.__name__
         success, progress, reward, diags = False, 0.0, 0.0, ()
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
-    llm = dict(ctx.notes.get("llm", {}))
+    llm = ctx.notes.get("llm")
+    poses: dict[str, tuple[float, ...]]
+    drift: Drift | None
     try:
         poses, drift = final_poses(world), placement_drift(world, ctx.placements)
     except Exception:  # noqa: BLE001 - attribution facts are optional
-        poses, drift = {}, {}
+        poses, drift = {}, None
     rec.text("verdict", ("SUCCESS" if success else "FAILURE") + f" (progress {progress:.2f})\n" + "\n".join(diags)
              + (f"\nerror: {error}" if error else ""))
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
-                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags), llm,
-                         final_poses=poses, drift=drift, calls=list(ctx.notes.get("llm_calls", [])))
+                         ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags),
+                         llm if isinstance(llm, LLMNotes) else None, final_poses=poses, drift=drift,
+                         error_type=error_type, error_status=status, calls=tuple(ctx.notes.get("llm_calls", ())))
 
 
 def _oracle_goals(task: Any, seed: int) -> tuple:

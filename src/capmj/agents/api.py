@@ -38,6 +38,7 @@ import numpy as np
 
 from capmj.agents.base import EpisodeContext
 from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, Footprints
+from capmj.errors import MotionFailed, UnknownObjectError, describe
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import quat_euler_xyz, quat_yaw, wxyz
@@ -147,7 +148,7 @@ class PlannerAPI:
             for o in objs:
                 if o.obj_id == int(obj):
                     return o
-            raise ValueError(f"no object with obj_id {int(obj)}; valid ids: {sorted(o.obj_id for o in objs)}")
+            raise UnknownObjectError(f"no object with obj_id {int(obj)}; valid ids: {sorted(o.obj_id for o in objs)}")
         if not isinstance(obj, str):
             raise ValueError(f"expected an object name (str), got {type(obj).__name__} {_summary(obj, 80)}")
         for o in objs:
@@ -168,7 +169,7 @@ class PlannerAPI:
         hint = f"; closest names: {', '.join(map(repr, close))}" if close else ""
         shown = names[:6]
         more = f" … ({len(names)} objects)" if len(names) > len(shown) else ""
-        raise ValueError(f"unknown object {obj!r}{hint}. Valid names: {', '.join(map(repr, shown))}{more}")
+        raise UnknownObjectError(f"unknown object {obj!r}{hint}. Valid names: {', '.join(map(repr, shown))}{more}")
 
     # ================================================================== poses
     def _pos(self, oid: int) -> np.ndarray:
@@ -189,7 +190,7 @@ class PlannerAPI:
             try:
                 result = fn(*args, **kwargs)
             except Exception as exc:
-                entry["error"] = f"{type(exc).__name__}: {exc}"
+                entry["error"] = describe(exc)
                 raise
             entry["result"] = _summary(result)
             return result
@@ -317,10 +318,10 @@ class PlannerAPI:
         res = self._ctx.pick_and_place(np.array([pick[0], pick[1], 0.0]), place, yaw)
         what = held.name if held is not None else f"the object at {np.round(pick, 3).tolist()}"
         if not res.ok:
-            raise RuntimeError(f"put_first_on_second({what!r}) failed: {res.status}: {res.message}")
+            raise MotionFailed(f"put_first_on_second({what!r}) failed: {res.status}: {res.message}", status=res.status)
         if held is not None and res.obj_id != held.obj_id:
             got = w.objects_by_id[res.obj_id].name if res.obj_id in w.objects_by_id else res.obj_id
-            raise RuntimeError(f"put_first_on_second: picked {got!r} instead of {held.name!r}")
+            raise MotionFailed(f"put_first_on_second: picked {got!r} instead of {held.name!r}", status="wrong_object")
 
 
 class PlanFunctions:

@@ -14,7 +14,9 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["PLANNER_PROGRAM", "attempt_facts", "final_poses", "placement_drift"]
+from capmj.records import ApiError, Drift
+
+__all__ = ["PLANNER_PROGRAM", "api_error", "failed_program", "final_poses", "placement_drift"]
 
 PLANNER_PROGRAM = "planner"
 
@@ -52,34 +54,29 @@ def failed_program(calls: Iterable[Any], attempt: int, error: str | None) -> str
     return PLANNER_PROGRAM
 
 
-def attempt_facts(calls: Iterable[Any], attempt: int, error: str | None,
-                  api_log: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-    """Per-attempt facts: ``failed_program`` and ``api_error`` (the error an API call raised)."""
-    facts: dict[str, Any] = {}
-    if error:
-        facts["failed_program"] = failed_program(calls, attempt, error)
-        last = api_log[-1] if api_log else None
-        if last is not None and last.get("error") and _core(str(last["error"])) in error:
-            facts["api_error"] = {"fn": last.get("fn"), "error": last["error"]}
-    return facts
+def api_error(error: str | None, api_log: Sequence[Mapping[str, Any]]) -> ApiError | None:
+    """The error the last API call raised, when the attempt's ``error`` is that one, else None."""
+    last = api_log[-1] if api_log else None
+    if error and last is not None and last.get("error") and _core(str(last["error"])) in error:
+        return ApiError(last.get("fn"), str(last["error"]))
+    return None
 
 
-def final_poses(world: Any) -> dict[str, list[float]]:
-    """Every object's final pose ``[x, y, z, qw, qx, qy, qz]`` (full float precision)."""
-    out: dict[str, list[float]] = {}
+def final_poses(world: Any) -> dict[str, tuple[float, ...]]:
+    """Every object's final pose ``(x, y, z, qw, qx, qy, qz)`` (full float precision)."""
+    out: dict[str, tuple[float, ...]] = {}
     for o in world.objects:
         p = world.pose(o.obj_id)
-        out[o.name] = [float(v) for v in (*p.pos, *p.quat)]
+        out[o.name] = tuple(float(v) for v in (*p.pos, *p.quat))
     return out
 
 
-def placement_drift(world: Any, placements: Mapping[int, tuple[Any, Any]]) -> dict[str, Any]:
+def placement_drift(world: Any, placements: Mapping[int, tuple[Any, Any]]) -> Drift:
     """How far each object placed in the last attempt ended from where its primitive put it.
 
     ``placements`` maps obj_id -> (place target, position right after the primitive settled).
     The drift of an object is the larger of (target -> end) in xy (and z when the target had a
-    height) and (position after the primitive -> end).  Returns ``{"max_m": ..., "objects":
-    {name: drift}}``.
+    height) and (position after the primitive -> end).
     """
     names = {o.obj_id: o.name for o in world.objects}
     drifts: dict[str, float] = {}
@@ -94,4 +91,4 @@ def placement_drift(world: Any, placements: Mapping[int, tuple[Any, Any]]) -> di
         if after is not None:
             d = max(d, math.dist([float(v) for v in after], end))
         drifts[names[oid]] = round(d, 6)
-    return {"max_m": max(drifts.values(), default=0.0), "objects": drifts}
+    return Drift(max(drifts.values(), default=0.0), drifts)

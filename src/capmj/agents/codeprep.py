@@ -18,7 +18,7 @@ import re
 
 from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES
 from capmj.agents.sandbox.checks import bound_names
-from capmj.errors import PlanError
+from capmj.errors import PlanError, PlanSyntaxError
 
 __all__ = [
     "RESERVED",
@@ -141,7 +141,7 @@ def function_defs(code: str, wanted: str, skip: set[str] | frozenset[str] = froz
     try:
         tree = ast.parse(code)
     except SyntaxError as exc:
-        raise PlanError(f"SyntaxError: {exc.msg} (in the function written for {wanted})",
+        raise PlanSyntaxError(f"SyntaxError: {exc.msg} (in the function written for {wanted})",
                         line=exc.lineno, code=code) from None
     lines = code.splitlines()
     parts: list[str] = []

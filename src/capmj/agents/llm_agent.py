@@ -15,10 +15,10 @@ Per episode (``act``)::
              or the verdict is unknown and on_unknown == "stop"
 
 CapRavens re-ran the *old* plan before the new one after a failed verdict; capmj resets the scene
-and runs only the new plan.  Every attempt is recorded in ``ctx.notes["llm"]["attempts"]`` (one
-plain dict per attempt, see :data:`ATTEMPT_FIELDS`) and under ``llm/attempt{k}/`` in the episode
-log, with LLM usage (calls, cached calls, tokens, cost) in ``ctx.notes["llm"]``, which the runner
-copies into the episode result.  The full transcript (every prompt, completion and executed code)
+and runs only the new plan.  Every attempt is recorded as an :class:`~capmj.records.AttemptRecord`
+(fields: :data:`~capmj.records.ATTEMPT_FIELDS`) in the episode's :class:`~capmj.records.LLMNotes`
+(``ctx.notes["llm"]``, with LLM usage: calls, cached calls, tokens, cost), which the runner puts in
+the episode result, and under ``llm/attempt{k}/`` in the episode log.  The full transcript (every prompt, completion and executed code)
 is kept in ``ctx.notes["llm_transcript"]`` and :attr:`LLMAgent.transcript`.
 
 Failures: bad code (no code, syntax error, sandbox violation, endless loop, huge allocation,
@@ -30,21 +30,23 @@ attempts.  The last attempt's error is re-raised so that the runner records it i
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any, Callable
 
 from capmj.agents.api import PlannerAPI
-from capmj.agents.attribution import attempt_facts
+from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
-from capmj.errors import ConfigError, LLMError, PlanError
+from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
 from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
 from capmj.tasks.protocol import episode_rng
 
 __all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_RETRIES", "DEFAULT_REPLAN_TEMPERATURE",
@@ -63,36 +65,6 @@ DEFAULT_REPLAN_RETRIES = 3
 recorded as not re-run (the temperatures and seeds are :func:`capmj.agents.planner.replan_sampling`)."""
 MAX_REPLAN_RETRIES = 10
 """Upper bound of ``replan_retries``: each retry is a full planner request."""
-
-ATTEMPT_FIELDS: dict[str, str] = {
-    "attempt": "1, 2, ...",
-    "reset": "the scene was reset to the initial state before this attempt",
-    "temperatures": "sampling temperature of each planner request of this attempt, in order",
-    "seeds": "sampling seed sent with each planner request (None: none sent; attempt 1 sends none)",
-    "code": "the plan as it ran (after import clean-up and parse_function), None without code; "
-            "for a plan not run, the answer's code",
-    "code_differs": "the plan differs from every earlier attempt's plan (None for attempt 1)",
-    "identical_to": "the earliest earlier attempt with the same plan, else None",
-    "extra_requests": "planner requests made because an answer repeated an earlier attempt's plan",
-    "not_run": "why the plan was not run ('identical to attempt 1 after 3 retries; not re-run'), else None; "
-               "the scene then ends where that attempt's plan ended",
-    "error": "the plan's error ('PlanError: line 3: ...'), None when it finished",
-    "error_kind": "'plan' or 'llm' (only when error is set)",
-    "error_line": "line of the plan the error points at, else None",
-    "verdict": "the reporter's verdict: True, False, or None (unknown, no reporter, or the plan failed)",
-    "verdict_source": "'code', 'repair', 'direct' or 'unknown'; None when no reporter ran",
-    "reason": "the reporter's one-line reason",
-    "wrong": "objects whose state the reporter says is wrong",
-    "reporter_errors": "problems met on the way to the verdict ('code: ...', 'repair: ...')",
-    "predicate": "the task's success predicate on the state the reporter judged (None if it failed)",
-    "predicate_progress": "the predicate's progress in [0, 1] on that state",
-    "on_unknown": "the policy applied to an unknown verdict ('replan'/'stop'), else None",
-    "report": "what the next attempt is told (verdict/error and object positions)",
-    "primitives": "pick-and-place calls", "api_calls": "planner API calls",
-    "llm_calls": "LLM calls", "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
-    "said": "messages of the plan's say()",
-}
-"""The keys of every attempt record in ``result.llm["attempts"]`` and their meaning."""
 
 CACHE_ENV = "CAPMJ_LLM_CACHE"
 """Default cache folder for LLM completions when ``cache_dir`` is not given."""
@@ -180,14 +152,10 @@ class LLMAgent:
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
-        attempts: list[dict[str, Any]] = []
-        notes: dict[str, Any] = {"model": self.model, "reporter": self.reporter, "max_attempts": self.attempts,
-                                 "on_unknown": self.on_unknown, "temperature": self.config.temperature,
-                                 "replan_temperature": self.replan_temperature,
-                                 "replan_retries": self.replan_retries, "attempts": attempts}
-        ctx.notes["llm"] = notes
+        attempts: list[AttemptRecord] = []
+        stopped: str | None = None
+        ctx.notes["llm"] = self._notes(client, attempts)
         ctx.notes["llm_transcript"] = transcript
-        self._usage(client, notes)
         goal = ctx.scene.goal
         reporter = make_reporter(self.reporter, self.prompts_dir)
         feedback: Feedback | None = None  # of the last attempt whose plan ran
@@ -205,7 +173,6 @@ class LLMAgent:
                 record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter,
                                                                feedback, plans, feedbacks)
                 plans.append(outcome.key)
-                attempts.append(record)
                 if outcome.not_run is not None and outcome.identical_to in ends:
                     # that plan, run again from the same initial state, would end where it ended
                     checkpoint, error = ends[outcome.identical_to]
@@ -214,43 +181,42 @@ class LLMAgent:
                     ends[k] = (ctx.checkpoint(), error)
                 last_error = error
                 unknown = error is None and report is not None and report.verdict is None
-                record["on_unknown"] = self.on_unknown if unknown else None
-                self._usage(client, notes)
+                record = replace(record, on_unknown=self.on_unknown if unknown else None)
+                attempts.append(record)
                 self._record_attempt(ctx, record)
                 if meter.exceeded is not None:
-                    notes["stopped"] = "llm budget"
+                    stopped = "llm budget"
                     last_error = error or meter.exceeded
                     break
                 if isinstance(error, LLMError):
-                    notes["stopped"] = "llm error"
+                    stopped = "llm error"
                     break
                 failed = outcome.not_run is not None or error is not None or (
                     report is not None and report.verdict is False) or (unknown and self.on_unknown == "replan")
                 if not failed:
-                    notes["stopped"] = "reporter: achieved" if report is not None and report.verdict else (
+                    stopped = "reporter: achieved" if report is not None and report.verdict else (
                         "reporter: unknown" if report is not None else "plan finished")
                     break
                 if k == self.attempts:
-                    notes["stopped"] = "attempts used up"
+                    stopped = "attempts used up"
                     break
                 if outcome.not_run is None:
                     feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
-                                        error=record["error"], error_line=record["error_line"],
+                                        error=record.error, error_line=record.error_line,
                                         report=report.text() if report is not None else "",
                                         scene=self._scene_summary(ctx))
                     feedbacks.append(feedback)
         finally:
             if reporter is not None:
                 reporter.close()
-            self._usage(client, notes)
-            notes["spend"] = meter.summary()
+            ctx.notes["llm"] = self._notes(client, attempts, stopped, meter.summary())
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
 
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
                  reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback]
-                 ) -> tuple[dict[str, Any], BaseException | None, Report | None, PlanOutcome]:
+                 ) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
         api = PlannerAPI(ctx)
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
@@ -258,16 +224,10 @@ class LLMAgent:
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
         before = len(client.records)
-        record: dict[str, Any] = {
-            "attempt": k, "reset": k > 1, "temperatures": [], "seeds": [],
-            "code": None, "code_differs": None, "identical_to": None, "extra_requests": 0, "not_run": None,
-            "error": None, "error_line": None, "verdict": None, "verdict_source": None, "reason": "", "wrong": [],
-            "reporter_errors": [], "predicate": None, "predicate_progress": None, "on_unknown": None,
-            "report": "", "primitives": 0, "llm_calls": 0, "prompt_tokens": 0, "completion_tokens": 0,
-            "api_calls": 0, "said": []}
         outcome = PlanOutcome()
         error: BaseException | None = None
         report: Report | None = None
+        predicate: tuple[bool | None, float | None] = (None, None)
         # re-plans: planner requests sample at replan_sampling (attempt 1 and helpers at the client's temperature)
         sampling = partial(replan_sampling, self.replan_temperature, ctx.seed, k) if k > 1 else None
         try:
@@ -286,54 +246,54 @@ class LLMAgent:
                 if llm_error is not None:
                     error = llm_error
                 else:
-                    report = Report(reporter.mode, None, "", f"reporter failed: {type(exc).__name__}: {exc}",
-                                    "unknown", (), (f"reporter failed: {type(exc).__name__}: {exc}",))
-            self._predicate(ctx, record)  # the same state the reporter judged
-        record["code"] = outcome.code
-        if k > 1 and outcome.key is not None:
-            record["code_differs"] = outcome.identical_to is None
-            record["identical_to"] = outcome.identical_to
+                    report = Report(reporter.mode, None, "", f"reporter failed: {describe(exc)}",
+                                    "unknown", (), (f"reporter failed: {describe(exc)}",))
+            predicate = self._predicate(ctx)  # the same state the reporter judged
+        replanned = k > 1 and outcome.key is not None
         temperature = client.config.temperature  # of requests without their own
-        record["temperatures"] = [temperature if t is None else t for t in outcome.temperatures]
-        record["seeds"] = list(outcome.seeds)
-        record["extra_requests"] = outcome.extra_requests
-        record["not_run"] = outcome.not_run
-        if outcome.not_run is not None:
-            record["report"] = f"plan not run: {outcome.not_run}"
-        record["primitives"] = ctx.attempt_primitives
-        new = client.records[before:]
-        record["llm_calls"] = len(new)
-        record["prompt_tokens"] = sum(r.prompt_tokens for r in new)
-        record["completion_tokens"] = sum(r.completion_tokens for r in new)
-        record["api_calls"] = len(api.call_log)
-        record["said"] = list(api.messages)
+        error_text = describe(error) if error is not None else None
+        error_type, error_status = error_facts(error) if error is not None else (None, None)
+        told = f"plan not run: {outcome.not_run}" if outcome.not_run is not None else ""
         if error is not None:
-            record["error"] = f"{type(error).__name__}: {error}"
-            record["error_kind"] = "llm" if isinstance(error, LLMError) else "plan"
-            record["error_line"] = error.line if isinstance(error, PlanError) else None
-            record["report"] = self._error_report(error, ctx)
-            record.update(attempt_facts(transcript, k, record["error"], api.call_log))
+            told = self._error_report(error, ctx)
         if report is not None:
-            record["verdict"] = report.verdict
-            record["verdict_source"] = report.source
-            record["reason"] = report.reason
-            record["wrong"] = list(report.wrong)
-            record["reporter_errors"] = list(report.errors)
-            record["report"] = report.text() + "\n" + self._scene_summary(ctx)
-            if report.error:
-                record["reporter_error"] = report.error
+            told = report.text() + "\n" + self._scene_summary(ctx)
+        new = client.records[before:]
+        record = AttemptRecord(
+            attempt=k, reset=k > 1,
+            temperatures=tuple(temperature if t is None else t for t in outcome.temperatures),
+            seeds=tuple(outcome.seeds), code=outcome.code,
+            code_differs=outcome.identical_to is None if replanned else None,
+            identical_to=outcome.identical_to if replanned else None,
+            extra_requests=outcome.extra_requests, not_run=outcome.not_run,
+            error=error_text,
+            error_kind=None if error is None else "llm" if isinstance(error, LLMError) else "plan",
+            error_line=error.line if isinstance(error, PlanError) else None,
+            error_type=error_type, error_status=error_status,
+            failed_program=failed_program(transcript, k, error_text) if error_text else None,
+            api_error=api_error(error_text, api.call_log),
+            verdict=report.verdict if report is not None else None,
+            verdict_source=report.source if report is not None else None,
+            reason=report.reason if report is not None else "",
+            wrong=tuple(report.wrong) if report is not None else (),
+            reporter_errors=tuple(report.errors) if report is not None else (),
+            reporter_error=report.error if report is not None and report.error else None,
+            predicate=predicate[0], predicate_progress=predicate[1], report=told,
+            primitives=ctx.attempt_primitives, api_calls=len(api.call_log), llm_calls=len(new),
+            prompt_tokens=sum(r.prompt_tokens for r in new), completion_tokens=sum(r.completion_tokens for r in new),
+            said=tuple(api.messages))
         ctx.recorder.text(f"llm/attempt{k}/api_calls", api.log_text())
         return record, error, report, outcome
 
     @staticmethod
-    def _predicate(ctx: EpisodeContext, record: dict[str, Any]) -> None:
-        """The task's predicate on the current state, for the record only (the LLM never sees it)."""
+    def _predicate(ctx: EpisodeContext) -> tuple[bool | None, float | None]:
+        """The task's predicate on the current state (success, progress), for the record only (the
+        LLM never sees it); (None, None) when it fails."""
         try:
             verdict = ctx.task.evaluate(ctx.scene, ctx.world.state())
         except Exception:  # noqa: BLE001 - the runner's final evaluation reports a broken predicate
-            return
-        record["predicate"] = bool(verdict.success)
-        record["predicate_progress"] = float(verdict.progress)
+            return None, None
+        return bool(verdict.success), float(verdict.progress)
 
     # ------------------------------------------------------------------ helpers
     @staticmethod
@@ -348,28 +308,32 @@ class LLMAgent:
         return "object positions [x, y, z] after the plan:\n" + "\n".join(lines)
 
     def _error_report(self, error: BaseException, ctx: EpisodeContext) -> str:
-        head = f"the plan failed with {type(error).__name__}: {error}"
+        head = f"the plan failed with {describe(error)}"
         return head + "\n" + self._scene_summary(ctx)
 
     @staticmethod
-    def _record_attempt(ctx: EpisodeContext, record: dict[str, Any]) -> None:
-        k = record["attempt"]
+    def _record_attempt(ctx: EpisodeContext, record: AttemptRecord) -> None:
+        k = record.attempt
         rec = ctx.recorder
-        if record.get("error"):
-            rec.text(f"llm/attempt{k}/error", record["error"])
-        verdict, source = record.get("verdict"), record.get("verdict_source")
-        word = {True: "achieved", False: "not achieved", None: "unknown"}[verdict]
-        if record.get("not_run"):
-            word = f"not run: {record['not_run']}"
-        if source is not None:
-            word += f" (reporter verdict from {source}; task predicate: {record.get('predicate')})"
-        rec.text(f"llm/attempt{k}/verdict", word + (f" (error: {record['error']})" if record.get("error") else ""))
-        if record.get("report"):
-            rec.text(f"llm/attempt{k}/report", record["report"])
+        if record.error:
+            rec.text(f"llm/attempt{k}/error", record.error)
+        word = {True: "achieved", False: "not achieved", None: "unknown"}[record.verdict]
+        if record.not_run:
+            word = f"not run: {record.not_run}"
+        if record.verdict_source is not None:
+            word += f" (reporter verdict from {record.verdict_source}; task predicate: {record.predicate})"
+        rec.text(f"llm/attempt{k}/verdict", word + (f" (error: {record.error})" if record.error else ""))
+        if record.report:
+            rec.text(f"llm/attempt{k}/report", record.report)
 
-    @staticmethod
-    def _usage(client: LLMClient, notes: dict[str, Any]) -> None:
+    def _notes(self, client: LLMClient, attempts: list[AttemptRecord], stopped: str | None = None,
+               spend: Spend | None = None) -> LLMNotes:
+        """The episode's notes so far: options, the client's usage, the attempts, why it stopped."""
         u = client.usage()
-        notes.update(calls=u.calls, cached_calls=u.cached_calls, failed_calls=u.failed_calls,
-                     prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
-                     cost_usd=round(u.cost_usd, 8), latency_s=round(u.latency_s, 3))
+        return LLMNotes(model=self.model, reporter=self.reporter, max_attempts=self.attempts,
+                        on_unknown=self.on_unknown, temperature=self.config.temperature,
+                        replan_temperature=self.replan_temperature, replan_retries=self.replan_retries,
+                        attempts=tuple(attempts), calls=u.calls, cached_calls=u.cached_calls,
+                        failed_calls=u.failed_calls, prompt_tokens=u.prompt_tokens,
+                        completion_tokens=u.completion_tokens, cost_usd=round(u.cost_usd, 8),
+                        latency_s=round(u.latency_s, 3), stopped=stopped, spend=spend)

@@ -23,13 +23,10 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from capmj.errors import BudgetExceeded, ConfigError
+from capmj.errors import ConfigError, LLMBudgetExceeded
+from capmj.records import Spend, SpendLimits
 
 __all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limits", "parse_price", "price_source"]
-
-
-class LLMBudgetExceeded(BudgetExceeded):
-    """The episode's LLM calls used more tokens or money than ``episode_max_*`` allows."""
 
 
 @dataclass(frozen=True)
@@ -160,11 +157,10 @@ class LLMMeter:
             raise LLMBudgetExceeded(problem)
         return completion
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> Spend:
         """Nominal usage of the episode (``cost_usd`` None when the price is unknown)."""
-        return {"calls": len(self.calls), "prompt_tokens": self.prompt_tokens,
-                "completion_tokens": self.completion_tokens, "tokens": self.tokens,
-                "cost_usd": None if self.source == "unknown" else round(self.cost_usd, 10),
-                "price_source": self.source,
-                "limits": {"tokens": self.max_tokens, "cost_usd": self.max_cost_usd},
-                "exceeded": str(self.exceeded) if self.exceeded is not None else None}
+        return Spend(calls=len(self.calls), prompt_tokens=self.prompt_tokens,
+                     completion_tokens=self.completion_tokens, tokens=self.tokens,
+                     cost_usd=None if self.source == "unknown" else round(self.cost_usd, 10),
+                     price_source=self.source, limits=SpendLimits(self.max_tokens, self.max_cost_usd),
+                     exceeded=str(self.exceeded) if self.exceeded is not None else None)

@@ -31,7 +31,7 @@ from capmj.agents.prompt_files import (META, QUESTION, Example, PromptFile, load
                                        load_system_prompt, object_names, prompts_dir)
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.agents.sandbox.runtime import WRITTEN_END, WRITTEN_START, located_error
-from capmj.errors import LLMError, PlanError
+from capmj.errors import LLMError, PlanError, describe
 from capmj.record import NullRecorder, Recorder
 
 __all__ = [
@@ -167,7 +167,7 @@ class LMPSession:
             completion = self.complete(messages, purpose=f"{call.lmp}#{call.n}", **sampling,
                                        **({"stop": stop} if stop else {}))
         except LLMError as exc:
-            self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            self.record(call, "error", describe(exc))
             if exc.partial:
                 self.record(call, "partial", exc.partial)
             raise
@@ -276,7 +276,7 @@ class LMPSession:
             return run_code(code, env, budget=self.lmp_budget, filename=f"<{lmp} {self.attempt}.{call.n}>",
                             program=program, rng=self.rng)
         except PlanError as exc:
-            self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            self.record(call, "error", describe(exc))
             raise
 
     def run_lmp(self, lmp: str, question: str, return_var: str, *, query: str | None = None) -> Any:
@@ -285,7 +285,7 @@ class LMPSession:
         ns = self._ask_and_run(call, lmp, question)
         if return_var not in ns:
             exc = PlanError(f"NameError: {lmp} code did not set '{return_var}'")
-            self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            self.record(call, "error", describe(exc))
             raise exc
         value = ns[return_var]
         self.record(call, "result", _short_repr(value))
@@ -313,7 +313,7 @@ class LMPSession:
             code = extract_code(text)
             source = function_defs(code, name, skip=set(self.reserved()))
         except PlanError as exc:
-            self.record(call, "error", f"{type(exc).__name__}: {exc}")
+            self.record(call, "error", describe(exc))
             raise
         self.record(call, "code", source)
         return source

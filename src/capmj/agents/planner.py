@@ -27,7 +27,7 @@ from typing import Any
 
 from capmj.agents.lmp import LMPCall, LMPSession, object_names
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
-from capmj.errors import PlanError
+from capmj.errors import PlanError, describe
 
 __all__ = ["DEFAULT_PLAN_BUDGET", "MAX_REPLAN_TEMPERATURE", "REPLAN_TEMPERATURE_STEP", "Feedback", "PlanOutcome",
            "Sampling", "build_messages", "feedback_text", "fresh_messages", "identical_text", "plan_and_run", "plan_key",
@@ -271,7 +271,7 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
         run_code(code, env, budget=budget, filename=f"<plan attempt {session.attempt}>", output=out.output,
                  program="the plan", rng=session.rng)
     except PlanError as exc:
-        session.record(call, "error", f"{type(exc).__name__}: {exc}")
+        session.record(call, "error", describe(exc))
         raise
     finally:
         if out.output:

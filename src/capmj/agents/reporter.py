@@ -39,7 +39,7 @@ from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp import LMPCall, LMPSession, load_system_prompt, prompts_dir
 from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.sandbox import extract_code, run_code
-from capmj.errors import CapmjError, ConfigError, PlanError
+from capmj.errors import CapmjError, ConfigError, PlanError, describe
 
 __all__ = ["REPORTERS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict", "make_reporter",
            "parse_verdict", "parse_wrong"]
@@ -254,7 +254,7 @@ class TextReporter:
             ns = run_code(code, env, budget=session.lmp_budget,
                           filename=f"<parse_completion {session.attempt}.{call.n}>")
         except PlanError as exc:
-            problem = f"{type(exc).__name__}: {exc}{_failing_line(exc, code)}"
+            problem = f"{describe(exc)}{_failing_line(exc, code)}"
             session.record(call, "error", problem)
             return None, "", (), problem
         judge, reason = ns.get("judge"), ns.get("reason")
@@ -302,7 +302,7 @@ class VLMReporter:
         try:
             self._initial, _ = self._render(ctx)
         except Exception as exc:  # noqa: BLE001 - no renderer: the direct verdict takes over
-            self._render_error = f"{type(exc).__name__}: {exc}"
+            self._render_error = describe(exc)
         else:
             ctx.recorder.image("llm/vlm/initial_rgb", self._initial)
 
@@ -336,7 +336,7 @@ class VLMReporter:
             ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
             png_initial, png_final, png_depth, rgb, depth = self.images(ctx)
         except (CapmjError, RuntimeError, OSError) as exc:
-            error = f"no images: {type(exc).__name__}: {exc}"
+            error = f"no images: {describe(exc)}"
             session.record(call, "error", error)
             return direct_verdict(session, goal, self.mode, (f"code: {error}",))
         rec = session.recorder

@@ -26,6 +26,7 @@ from capmj.llm.options import add_llm_options, llm_values
 if TYPE_CHECKING:  # the bench modules load lazily: importing the CLI stays light
     from capmj.bench.grid import GridStats, Job
     from capmj.bench.spend import BudgetTracker, RunBudget
+    from capmj.records import EpisodeRecord
 
 TEST_SEEDS = "10001:10101:2"
 """The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
@@ -391,11 +392,11 @@ def _plan(s: _Settings, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
     """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
     and the grid's size; prints the plan to stderr."""
     from capmj.bench.grid import Job, rrd_relpath
-    from capmj.bench.results import EPISODES, episode_key, read_results
+    from capmj.bench.results import EPISODES, read_records
     from capmj.bench.spend import BudgetTracker
 
-    existing, bad = read_results(s.out / EPISODES)
-    done = {episode_key(r) for r in existing}
+    existing, bad = read_records(s.out / EPISODES)
+    done = {r.key for r in existing}
     budget = BudgetTracker(s.run_budget, existing)
     jobs = []
     for t in g.tasks:
@@ -428,10 +429,10 @@ class _Progress:
             self.bar = tqdm(total=n_jobs, file=sys.stderr, unit="ep", dynamic_ncols=True, mininterval=0.5,
                             desc="episodes")
 
-    def __call__(self, rec: dict[str, Any]) -> None:
+    def __call__(self, rec: EpisodeRecord) -> None:
         self.budget.add(rec)
         self.n += 1
-        self.ok += bool(rec.get("success"))
+        self.ok += rec.success
         if self.bar is not None:
             self.bar.set_postfix_str(f"success {100 * self.ok / self.n:.0f}% ({self.ok}/{self.n})", refresh=False)
             self.bar.update(1)
@@ -468,13 +469,13 @@ def _execute(args: argparse.Namespace, s: _Settings, g: _Grid, jobs: list[Job], 
 
 
 def _write_summary(s: _Settings, stats: GridStats | None, elapsed: float, progress: _Progress,
-                   budget: BudgetTracker) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+                   budget: BudgetTracker) -> tuple[list[EpisodeRecord], dict[str, Any]]:
     """summary.json/md/png over every episode in the folder (earlier runs' included), with this
     run's own figures under "run"; returns the records and the summary."""
     from capmj.bench.report import write_summary
-    from capmj.bench.results import EPISODES, read_results, summarize
+    from capmj.bench.results import EPISODES, read_records, summarize
 
-    records, _ = read_results(s.out / EPISODES)
+    records, _ = read_records(s.out / EPISODES)
     summary = summarize(records)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": progress.n, "workers": s.workers,
                       "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
@@ -483,7 +484,7 @@ def _write_summary(s: _Settings, stats: GridStats | None, elapsed: float, progre
     return records, summary
 
 
-def _print_outcome(out: Path, summary: dict[str, Any], records: list[dict[str, Any]], total: int, elapsed: float,
+def _print_outcome(out: Path, summary: dict[str, Any], records: list[EpisodeRecord], total: int, elapsed: float,
                    progress: _Progress, budget: BudgetTracker, interrupted: int | None) -> int:
     """Success per configuration on stdout, how to continue a stopped run on stderr; the exit code."""
     from capmj.bench.report import pct_cell

@@ -16,8 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-from capmj.bench.failures import failure_of
-from capmj.bench.results import EPISODES, read_results
+from capmj.bench.results import EPISODES, read_records
 from capmj.bench.transcripts import read_calls
 from capmj.errors import ConfigError
 
@@ -32,25 +31,25 @@ def chat_examples(run_dir: str | Path, *, only_success: bool = False,
     run_dir = Path(run_dir)
     if not (run_dir / EPISODES).is_file():
         raise ConfigError(f"{run_dir} is not a result folder (no {EPISODES})")
-    records, _ = read_results(run_dir / EPISODES)
-    records.sort(key=lambda r: (str(r["task"]), int(r["seed"])))
+    records, _ = read_records(run_dir / EPISODES)
+    records.sort(key=lambda r: (r.task, r.seed))
     for rec in records:
-        if only_success and rec.get("success") is not True:
+        if only_success and not rec.success:
             continue
-        verdicts = {a.get("attempt"): a.get("verdict") for a in (rec.get("llm") or {}).get("attempts") or []}
+        verdicts = {a.attempt: a.verdict for a in rec.llm_attempts}
         try:
             calls = read_calls(run_dir, rec)
         except (OSError, ValueError) as exc:
-            raise ConfigError(f"transcript of {rec['task']} seed {rec['seed']} is unreadable: {exc}") from None
+            raise ConfigError(f"transcript of {rec.task} seed {rec.seed} is unreadable: {exc}") from None
         for call in calls:
             messages = [dict(m) for m in call["messages"]] + [{"role": "assistant", "content": call["completion"]}]
             example: dict[str, Any] = {"messages": messages}
             if not messages_only:
                 lmp, _, n = str(call.get("purpose", "")).partition("#")
                 example["metadata"] = {
-                    "task": rec["task"], "seed": rec["seed"], "model": rec.get("model"),
+                    "task": rec.task, "seed": rec.seed, "model": rec.model,
                     "attempt": call.get("attempt"), "lmp": lmp, "call": int(n) if n.isdigit() else None,
-                    "episode_success": rec.get("success"), "failure": failure_of(rec),
+                    "episode_success": rec.success, "failure": rec.failure,
                     "attempt_verdict": verdicts.get(call.get("attempt")), "cached": call.get("cached"),
                 }
             yield example

@@ -11,7 +11,8 @@ documented with examples in ``docs/failures.md``; in short:
    state the reporter judged) but the reporter said "not achieved", so the scene was reset.
 4. ``llm_error`` — the provider failed after the client's retries (attempt ``error_kind`` llm).
 5. The last attempt raised: ``helper_lmp`` when the failed program is a helper LMP (its own code
-   failed, whatever the kind), else by the error: ``no_code``, ``syntax``, ``sandbox_violation``,
+   failed, whatever the kind), else by the class of the error (``error_type``, recorded per
+   attempt and per episode by :func:`capmj.errors.error_facts`; never by its message): ``no_code``, ``syntax``, ``sandbox_violation``,
    ``budget`` (wall time, lines, elements, API calls, primitives, simulation steps),
    ``unknown_object``, ``motion`` (unreachable / no grip / wrong object picked), ``api_misuse``
    (an API function rejected its arguments), ``plan_exception`` (the plan's own code raised).
@@ -22,15 +23,29 @@ documented with examples in ``docs/failures.md``; in short:
    ``physics`` when an object the last attempt placed ended more than :data:`DRIFT_TOL_M` from
    where its pick-and-place put it (a tower fell, a block slid off), else ``wrong_plan``.
 
-Records written before these facts were recorded (no ``failed_program``/``api_error``/``drift``)
-are still classified, from the error text alone.
+:func:`classify` reads record attributes (:class:`~capmj.records.Episode`).  Lines written before
+``error_type`` was recorded get one from their error text when they are loaded, in the one place
+that reads old lines (:mod:`capmj.bench.migrate`); lines without ``failed_program``/``api_error``
+(non-LLM agents, old runs) take a ValueError/TypeError as an argument error (``api_misuse``).
 """
 
 from __future__ import annotations
 
-import re
 from collections import Counter
-from typing import Any, Iterable, Mapping
+from typing import Iterable
+
+from capmj.errors import (
+    BudgetExceeded,
+    InfrastructureError,
+    LLMError,
+    MotionFailed,
+    NoCodeError,
+    PlanSyntaxError,
+    SandboxViolation,
+    UnknownObjectError,
+    error_class,
+)
+from capmj.records import AttemptRecord, Episode, EpisodeRecord
 
 __all__ = ["DRIFT_TOL_M", "LABELS", "breakdown", "classify", "failure_of"]
 
@@ -45,88 +60,72 @@ DRIFT_TOL_M = 0.02
 """An object that ends farther than this from where its last pick-and-place put it has moved on
 its own (the oracle's placements end within 2 mm)."""
 
-_MOTION = re.compile(r"put_first_on_second\(.*failed: (unreachable|no_grip|timeout|held_nothing)"
-                     r"|put_first_on_second: picked .* instead of")
-_UNKNOWN = re.compile(r"unknown object|no object with obj_id")
-_ARGUMENTS = re.compile(r"\b(ValueError|TypeError)\b")
-_INFRA = re.compile(r"^(WorkerCrash|WorkerError)|^evaluation failed")
+def _is(error_type: str | None, *kinds: type[BaseException]) -> bool:
+    cls = error_class(error_type)
+    return cls is not None and issubclass(cls, kinds)
 
 
-def _predicate(attempt: Mapping[str, Any]) -> bool | None:
-    """The task predicate recorded for an attempt (field names of this and the reporter branch)."""
-    for key in ("predicate", "predicate_success"):
-        v = attempt.get(key)
-        if isinstance(v, bool):
-            return v
-        if isinstance(v, Mapping) and isinstance(v.get("success"), bool):
-            return v["success"]
-    return None
-
-
-def _error_label(error: str, attempt: Mapping[str, Any] | None) -> str:
-    a = attempt or {}
-    program = a.get("failed_program")
+def _error_label(error_type: str | None, attempt: AttemptRecord | None) -> str:
+    """The label of an attempt (or a non-LLM episode) that raised, from the class of what failed."""
+    program = attempt.failed_program if attempt is not None else None
     if program and program != "planner":
         return "helper_lmp"
-    if "no code in completion" in error:
-        return "no_code"
-    if "SyntaxError" in error:
-        return "syntax"
-    if "SandboxViolation" in error:
-        return "sandbox_violation"
-    if "BudgetExceeded" in error or "budget" in error.split(":", 1)[0].lower():
-        return "budget"
-    if _MOTION.search(error):
-        return "motion"
-    if _UNKNOWN.search(error):
-        return "unknown_object"
-    if a.get("api_error"):
+    for kind, label in _KINDS:
+        if _is(error_type, kind):
+            return label
+    if attempt is not None and attempt.api_error is not None:
         return "api_misuse"
-    if "api_error" not in a and "failed_program" not in a and _ARGUMENTS.search(error):
-        return "api_misuse"  # an old record without the facts: ValueError/TypeError are argument errors
+    if (attempt is None or attempt.failed_program is None) and error_class(error_type) in (ValueError, TypeError):
+        return "api_misuse"  # no attempt facts (a plan of a non-LLM agent): an argument error of an API function
     return "plan_exception"
 
 
-def classify(rec: Mapping[str, Any]) -> str | None:
-    """The failure label of one episode record, None when it succeeded."""
-    if rec.get("success") is True:
+_KINDS: tuple[tuple[type[BaseException], str], ...] = (
+    (NoCodeError, "no_code"), (PlanSyntaxError, "syntax"), (SandboxViolation, "sandbox_violation"),
+    (BudgetExceeded, "budget"), (MotionFailed, "motion"), (UnknownObjectError, "unknown_object"),
+)
+"""Error classes with a label of their own, tried in this order."""
+
+
+def classify(rec: Episode) -> str | None:
+    """The failure label of one episode, None when it succeeded."""
+    if rec.success:
         return None
-    error = rec.get("error") or None
-    llm = rec.get("llm") or {}
-    attempts = [a for a in (llm.get("attempts") or []) if isinstance(a, Mapping)]
-    if error and (not rec.get("attempts") or _INFRA.search(str(error))):
+    error = rec.error or None
+    llm = rec.llm
+    attempts = rec.llm_attempts
+    if error and (not rec.attempts or _is(rec.error_type, InfrastructureError)):
         return "infrastructure"
-    if llm.get("stopped") == "llm budget":
+    if llm is not None and llm.stopped == "llm budget":
         return "budget"
     for a in attempts[:-1]:
-        if a.get("verdict") is False and _predicate(a) is True:
+        if a.verdict is False and a.predicate is True:
             return "reporter_false_negative"
     last = attempts[-1] if attempts else None
-    same = last.get("identical_to") if last is not None and last.get("not_run") else None
-    if isinstance(same, int) and 1 <= same < len(attempts):
+    same = last.identical_to if last is not None and last.not_run else None
+    if same is not None and 1 <= same < len(attempts):
         last = attempts[same - 1]  # a plan not re-run ends the episode as that attempt's plan did
-    if last is not None and last.get("error_kind") == "llm" or (error and str(error).startswith("LLMError")):
+    if last is not None and last.error_kind == "llm" or (error and _is(rec.error_type, LLMError)):
         return "llm_error"
-    last_error = (last or {}).get("error") or error
-    if last_error:
-        return _error_label(str(last_error), last)
-    if last is not None and last.get("verdict") is True and len(attempts) < int(llm.get("max_attempts") or 1):
+    if last is not None and last.error:
+        return _error_label(last.error_type, last)
+    if error:
+        return _error_label(rec.error_type, last)
+    if last is not None and last.verdict is True and llm is not None and len(attempts) < (llm.max_attempts or 1):
         return "reporter_false_positive"
-    drift = rec.get("drift") or {}
-    if isinstance(drift.get("max_m"), (int, float)) and drift["max_m"] > DRIFT_TOL_M:
+    if rec.drift is not None and rec.drift.max_m is not None and rec.drift.max_m > DRIFT_TOL_M:
         return "physics"
     return "wrong_plan"
 
 
-def failure_of(rec: Mapping[str, Any]) -> str | None:
-    """The recorded label, or the classification of a record written before labels existed."""
-    if "failure" in rec:
-        return rec["failure"]
-    return classify(rec)
+def failure_of(rec: EpisodeRecord) -> str | None:
+    """The recorded label (records written before labels existed are labelled when loaded,
+    :mod:`capmj.bench.migrate`)."""
+    return rec.failure
 
 
-def breakdown(records: Iterable[Mapping[str, Any]]) -> dict[str, int]:
+def breakdown(records: Iterable[EpisodeRecord]) -> dict[str, int]:
     """Failure counts by label (labels in :data:`LABELS` order, only those that occur)."""
-    counts = Counter(f for f in (failure_of(r) for r in records) if f is not None)
+    counts = Counter(r.failure for r in records if r.failure is not None)
     order = {lab: i for i, lab in enumerate(LABELS)}
     return {lab: counts[lab] for lab in sorted(counts, key=lambda x: (order.get(x, len(order)), x))}

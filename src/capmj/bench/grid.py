@@ -29,11 +29,13 @@ import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, ThreadPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from capmj.bench.results import ResultsWriter, episode_key, sanitize
+from capmj.errors import InfrastructureError, WorkerCrash, WorkerError, describe, error_facts
+from capmj.records import EpisodeRecord, EpisodeResult
 
 MP_CONTEXT = "spawn"
 RECYCLE_LOGGING_WORKERS = 200
@@ -68,11 +70,12 @@ def _safe(s: str) -> str:
     return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in str(s))
 
 
-def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, **extra: Any) -> dict[str, Any]:
-    """A result line for an episode that produced no result of its own (worker crash, bad task)."""
-    from capmj.runner import EpisodeResult
-
-    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error).to_dict()
+def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, error_type: str | None,
+                  **extra: Any) -> dict[str, Any]:
+    """A result line for an episode that produced no result of its own (worker crash, bad task);
+    ``error_type`` names the class of the failure (:mod:`capmj.errors`)."""
+    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error,
+                        error_type=error_type).to_dict()
     rec.update(extra)
     return rec
 
@@ -106,7 +109,7 @@ def init_worker(spec: AgentSpec, registered: bytes | None = None, llm_gate: Any 
                 registry.register(task, replace=True)
         _WORKER["idle"].put(_build_agent(spec))
     except Exception as exc:  # noqa: BLE001 - reported per episode instead of breaking the pool
-        _WORKER["init_error"] = f"{type(exc).__name__}: {exc}"
+        _WORKER["init_error"] = (describe(exc), error_facts(exc)[0])
 
 
 def _build_agent(spec: AgentSpec) -> Any:
@@ -129,7 +132,7 @@ def run_job(job: Job) -> dict[str, Any]:
     """Run one episode in this worker; always returns a result record (never raises for the episode)."""
     spec: AgentSpec = _WORKER["spec"]
     if "init_error" in _WORKER:
-        return failed_record(job.task, job.seed, spec.name, spec.options.get("model"), _WORKER["init_error"])
+        return failed_record(job.task, job.seed, spec.name, spec.options.get("model"), *_WORKER["init_error"])
     agent = _take_agent()
     try:
         return _run_with(agent, job, spec)
@@ -145,13 +148,13 @@ def _run_with(agent: Any, job: Job, spec: AgentSpec) -> dict[str, Any]:
 
         task = get_task(job.task)
     except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
-        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+        return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
     from capmj.runner import record_episode
 
     try:
         result = record_episode(task, job.seed, agent, job.rrd, images=spec.images)
     except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
-        return failed_record(job.task, job.seed, name, model, f"{type(exc).__name__}: {exc}")
+        return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
     return sanitize(result.to_dict())
 
 
@@ -184,20 +187,23 @@ class GridStats:
 
 
 class RecordSink:
-    """What every executor does with a finished episode: count it, hand it to ``on_result``."""
+    """What every executor does with a finished episode: read the worker's result (a plain dict,
+    as it crossed the process boundary), count it, hand it to ``on_result``."""
 
     agent: AgentSpec
     stats: GridStats
-    on_result: Callable[[Job, dict[str, Any]], None]
+    on_result: Callable[[Job, EpisodeResult], None]
 
     def _emit(self, job: Job, rec: dict[str, Any]) -> None:
+        result = EpisodeResult.from_dict(rec)
         self.stats.done += 1
-        self.stats.successes += bool(rec.get("success"))
-        self.stats.episode_wall_s += float(rec.get("wall_s") or 0.0)
-        self.on_result(job, rec)
+        self.stats.successes += result.success
+        self.stats.episode_wall_s += float(result.wall_s or 0.0)
+        self.on_result(job, result)
 
-    def _failed(self, job: Job, error: str) -> dict[str, Any]:
-        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error)
+    def _failed(self, job: Job, error: str, error_type: type[InfrastructureError]) -> dict[str, Any]:
+        return failed_record(job.task, job.seed, self.agent.name, self.agent.options.get("model"), error,
+                             error_type.__name__)
 
 
 class Grid(RecordSink):
@@ -208,7 +214,7 @@ class Grid(RecordSink):
     re-run alone, so crash accounting is per episode whatever the concurrency.
     """
 
-    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
+    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, EpisodeResult], None],
                  registered: Sequence[Any] = (), recycle_after: int | None = None, concurrency: int = 1,
                  max_llm_concurrency: int | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
@@ -334,7 +340,7 @@ class Grid(RecordSink):
                         broken = True
                         continue
                     except Exception as exc:  # noqa: BLE001 - e.g. a result that failed to unpickle
-                        recs = [self._failed(j, f"WorkerError: {type(exc).__name__}: {exc}") for j in batch]
+                        recs = [self._failed(j, f"WorkerError: {describe(exc)}", WorkerError) for j in batch]
                     del inflight[fut]
                     for job, rec in zip(batch, recs):
                         self._emit(job, rec)
@@ -346,7 +352,7 @@ class Grid(RecordSink):
                 if self._isolating and len(crashed) == 1:
                     job = crashed[0]
                     self.stats.crashes += 1
-                    self._emit(job, self._failed(job, crash_error(_describe_codes(codes))) | {"rrd": None})
+                    self._emit(job, self._failed(job, crash_error(_describe_codes(codes)), WorkerCrash) | {"rrd": None})
                 else:
                     self.stats.retried += len(crashed)
                     suspects.extend(crashed)
@@ -375,7 +381,7 @@ def _describe_codes(codes: Sequence[int]) -> str:
 
 
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out_dir: Path,
-                     writer: ResultsWriter, progress: Callable[[dict[str, Any]], None] | None = None,
+                     writer: ResultsWriter, progress: Callable[[EpisodeRecord], None] | None = None,
                      registered: Sequence[Any] = (), concurrency: int = 1,
                      max_llm_concurrency: int | None = None, executor: str = "local",
                      ray_address: str | None = None, stop: Callable[[], bool] | None = None) -> GridStats:
@@ -390,15 +396,15 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, *, workers: int, out
 
     out_dir = Path(out_dir).resolve()
 
-    def on_result(job: Job, rec: dict[str, Any]) -> None:
-        write_calls(out_dir, rec)
-        rec["failure"] = classify(rec)
-        rrd = rec.get("rrd")
+    def on_result(job: Job, result: EpisodeResult) -> None:
+        transcript = write_calls(out_dir, result)
+        rrd = result.rrd
         if rrd:
             try:
-                rec["rrd"] = os.path.relpath(rrd, out_dir)
+                rrd = os.path.relpath(rrd, out_dir)
             except ValueError:
                 pass
+        rec = EpisodeRecord.of(replace(result, rrd=rrd, calls=()), failure=classify(result), transcript=transcript)
         writer.write(rec)
         if progress is not None:
             progress(rec)

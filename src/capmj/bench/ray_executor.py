@@ -25,7 +25,8 @@ from collections import deque
 from typing import Any, Callable, Iterable, Sequence
 
 from capmj.bench.grid import AgentSpec, GridStats, Job, RecordSink, crash_error, init_worker, run_job
-from capmj.errors import ConfigError
+from capmj.errors import ConfigError, WorkerCrash, WorkerError, describe
+from capmj.records import EpisodeResult
 
 FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "OPENAI_API_KEY",
                  "ANTHROPIC_API_KEY", "LITELLM_LOCAL_MODEL_COST_MAP")
@@ -54,7 +55,7 @@ class EpisodeActor:
 class RayGrid(RecordSink):
     """Same contract as :class:`~capmj.bench.grid.Grid`: ``run(jobs)`` hands each record to ``on_result``."""
 
-    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, dict[str, Any]], None],
+    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, EpisodeResult], None],
                  registered: Sequence[Any] = (), concurrency: int = 1, max_llm_concurrency: int | None = None,
                  address: str | None = None, stop: Callable[[], bool] | None = None) -> None:
         self.agent = agent
@@ -148,7 +149,7 @@ class RayGrid(RecordSink):
             except ray.exceptions.RayActorError:
                 if i < 0:   # died again while running alone
                     self.stats.crashes += 1
-                    self._emit(job, self._failed(job, crash_error(" (the Ray actor died)")) | {"rrd": None})
+                    self._emit(job, self._failed(job, crash_error(" (the Ray actor died)"), WorkerCrash) | {"rrd": None})
                     iso = None
                     continue
                 # the actor is gone: everything it had in flight is a suspect; replace the actor
@@ -160,7 +161,7 @@ class RayGrid(RecordSink):
                 actors[i], load[i] = self._new_actor(self.concurrency), 0
                 continue
             except Exception as exc:  # noqa: BLE001 - e.g. a result that failed to deserialise
-                rec = self._failed(job, f"WorkerError: {type(exc).__name__}: {exc}")
+                rec = self._failed(job, f"WorkerError: {describe(exc)}", WorkerError)
             self._emit(job, rec)
 
 

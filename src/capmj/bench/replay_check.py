@@ -18,23 +18,25 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Sequence
 
-from capmj.bench.results import CONFIG, EPISODES, load_json, read_results, sanitize
+from capmj.bench.migrate import as_record
+from capmj.bench.results import CONFIG, EPISODES, load_json, read_records, sanitize
 from capmj.errors import CapmjError, ConfigError
+from capmj.records import EpisodeRecord, EpisodeResult
 
 __all__ = ["compare", "main", "replay_check"]
 
 TOL = 1e-9
 
 
-def compare(old: Mapping[str, Any], new: Mapping[str, Any], tol: float = TOL) -> list[str]:
+def compare(old: EpisodeRecord, new: EpisodeRecord, tol: float = TOL) -> list[str]:
     """Why the replayed record ``new`` differs from the recorded ``old`` ([] when it does not)."""
     reasons: list[str] = []
-    error = str(new.get("error") or "")
+    error = new.error or ""
     if "cache-only" in error:
         return [f"missing cache entry: {error}"]
-    a, b = old.get("final_poses") or {}, new.get("final_poses") or {}
+    a, b = old.final_poses, new.final_poses
     if not a:
         reasons.append("the recorded episode has no final poses (written by an older capmj)")
     elif set(a) != set(b):
@@ -43,11 +45,12 @@ def compare(old: Mapping[str, Any], new: Mapping[str, Any], tol: float = TOL) ->
         worst = max((abs(float(x) - float(y)), name) for name in a for x, y in zip(a[name], b[name]))
         if worst[0] > tol:
             reasons.append(f"final pose of {worst[1]!r} differs by {worst[0]:.3g} (> {tol:g})")
-    for key in ("success", "progress", "failure", "error"):
-        if old.get(key) != new.get(key):
-            reasons.append(f"{key}: recorded {old.get(key)!r}, replayed {new.get(key)!r}")
-    va = [x.get("verdict") for x in (old.get("llm") or {}).get("attempts") or []]
-    vb = [x.get("verdict") for x in (new.get("llm") or {}).get("attempts") or []]
+    for key, was, now in (("success", old.success, new.success), ("progress", old.progress, new.progress),
+                          ("failure", old.failure, new.failure), ("error", old.error, new.error)):
+        if was != now:
+            reasons.append(f"{key}: recorded {was!r}, replayed {now!r}")
+    va = [x.verdict for x in old.llm_attempts]
+    vb = [x.verdict for x in new.llm_attempts]
     if va != vb:
         reasons.append(f"reporter verdicts: recorded {va}, replayed {vb}")
     return reasons
@@ -57,7 +60,6 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
                  progress: Any = None) -> dict[str, Any]:
     """Replay every episode of ``run_dir``; ``{"episodes", "passed", "http_calls", "mismatches"}``."""
     from capmj.agents.factory import make_agent
-    from capmj.bench.failures import classify
     from capmj.runner import run_episode
     from capmj.tasks.registry import get_task
 
@@ -77,23 +79,22 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
             raise ConfigError(f"LLM cache folder {str(cache)!r} does not exist")
         options.update(cache_dir=str(cache), cache_only=True)
     agent = make_agent(agent_name, **options)
-    records, _ = read_results(run_dir / EPISODES)
-    records.sort(key=lambda r: (str(r["task"]), int(r["seed"])))
+    records, _ = read_records(run_dir / EPISODES)
+    records.sort(key=lambda r: (r.task, r.seed))
     mismatches: list[dict[str, Any]] = []
     live = 0
     for rec in records:
         try:
-            result = run_episode(get_task(str(rec["task"])), int(rec["seed"]), agent)
+            result = run_episode(get_task(rec.task), rec.seed, agent)
         except CapmjError as exc:
-            mismatches.append({"task": rec["task"], "seed": rec["seed"], "reasons": [f"cannot replay: {exc}"]})
+            mismatches.append({"task": rec.task, "seed": rec.seed, "reasons": [f"cannot replay: {exc}"]})
             continue
-        new = sanitize(result.to_dict())
-        new["failure"] = classify(new)
-        llm = new.get("llm") or {}
-        live += int(llm.get("calls") or 0) - int(llm.get("cached_calls") or 0) - int(llm.get("failed_calls") or 0)
+        new = as_record(EpisodeResult.from_dict(sanitize(result.to_dict())))  # as the grid would write it
+        if new.llm is not None:
+            live += new.llm.calls - new.llm.cached_calls - new.llm.failed_calls
         reasons = compare(rec, new, tol)
         if reasons:
-            mismatches.append({"task": rec["task"], "seed": rec["seed"], "reasons": reasons})
+            mismatches.append({"task": rec.task, "seed": rec.seed, "reasons": reasons})
         if progress is not None:
             progress(rec, reasons)
     return {"run": str(run_dir), "episodes": len(records), "passed": len(records) - len(mismatches),
@@ -111,8 +112,8 @@ def main(argv: Sequence[str]) -> int:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     args = p.parse_args(list(argv))
 
-    def show(rec: Mapping[str, Any], reasons: list[str]) -> None:
-        print(f"{rec['task']} seed {rec['seed']}: " + ("ok" if not reasons else "DIFFERS: " + "; ".join(reasons)),
+    def show(rec: EpisodeRecord, reasons: list[str]) -> None:
+        print(f"{rec.task} seed {rec.seed}: " + ("ok" if not reasons else "DIFFERS: " + "; ".join(reasons)),
               file=sys.stderr)
 
     try:

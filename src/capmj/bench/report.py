@@ -25,13 +25,14 @@ from capmj.bench.results import (
     config_of,
     default_label,
     load_json,
-    read_results,
+    read_records,
     summarize,
     wilson,
     write_result_json,
 )
 from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
 from capmj.errors import ConfigError
+from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
@@ -234,7 +235,7 @@ def write_summary(out_dir: str | Path, summary: Mapping[str, Any], *, title: str
 
 def summarize_dir(run_dir: str | Path) -> dict[str, Any]:
     """The summary of one result folder's ``episodes.jsonl``."""
-    records, _ = read_results(Path(run_dir) / EPISODES)
+    records, _ = read_records(Path(run_dir) / EPISODES)
     return summarize(records)
 
 
@@ -244,7 +245,7 @@ def _options_suffix(cfg: Mapping[str, Any] | None) -> str:
     return f" ({', '.join(parts)})" if parts else ""
 
 
-def load_folders(dirs: Sequence[str | Path]) -> tuple[list[dict[str, Any]], dict[int, str], list[str]]:
+def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[int, str], list[str]]:
     """Records of several result folders with a column label per record (by ``id``).
 
     A column is one (agent, model) configuration of one folder, labelled ``agent model`` plus the
@@ -252,13 +253,13 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[dict[str, Any]], dict
     two folders still give the same label, the folder name is appended.  Raises ``ConfigError``
     for a folder without ``episodes.jsonl``.
     """
-    per_folder: list[tuple[Path, list[dict[str, Any]], str]] = []
+    per_folder: list[tuple[Path, list[EpisodeRecord], str]] = []
     for d in dirs:
         d = Path(d)
         f = d / EPISODES
         if not f.is_file():
             raise ConfigError(f"{d} is not a result folder (no {EPISODES})")
-        records, _ = read_results(f)
+        records, _ = read_records(f)
         per_folder.append((d, records, _options_suffix(load_json(d / CONFIG))))
     base: dict[tuple[int, tuple[str, str | None]], str] = {}
     for i, (d, records, suffix) in enumerate(per_folder):
@@ -268,7 +269,7 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[dict[str, Any]], dict
     for lab in base.values():
         counts[lab] = counts.get(lab, 0) + 1
     final = {key: (f"{lab} [{per_folder[key[0]][0].name}]" if counts[lab] > 1 else lab) for key, lab in base.items()}
-    out: list[dict[str, Any]] = []
+    out: list[EpisodeRecord] = []
     labels: dict[int, str] = {}
     for i, (d, records, _) in enumerate(per_folder):
         for r in records:

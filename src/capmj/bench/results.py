@@ -1,10 +1,12 @@
 """Result files of a benchmark run: ``episodes.jsonl`` (append-only, crash-safe) and the summary statistics.
 
-``episodes.jsonl`` has one JSON object per finished episode with every field of
-:class:`capmj.runner.EpisodeResult` (task, seed, agent, model, success, progress, reward,
-primitives, attempts, sim_s, wall_s, error, goal, diagnostics, llm, rrd, final_poses, drift), plus
-``failure`` (:mod:`capmj.bench.failures`) and ``transcript`` (the episode's LLM calls moved to
-``transcripts/``, :mod:`capmj.bench.transcripts`).  Lines are appended by
+``episodes.jsonl`` has one JSON object per finished episode, an :class:`~capmj.records.EpisodeRecord`:
+every field of the runner's :class:`~capmj.records.EpisodeResult` (task, seed, agent, model,
+success, progress, reward, primitives, attempts, sim_s, wall_s, error, goal, diagnostics, llm, rrd,
+final_poses, drift), plus ``failure`` (:mod:`capmj.bench.failures`), ``transcript`` (the episode's
+LLM calls moved to ``transcripts/``, :mod:`capmj.bench.transcripts`) and ``schema``.
+:func:`read_records` returns records (lines of older versions migrated, :mod:`capmj.bench.migrate`);
+:func:`read_results` the same as plain dicts, for scripts.  Lines are appended by
 one process only (the grid's parent) as one ``write`` of a complete line followed by ``fsync``, so
 a run killed at any moment leaves complete lines plus at most one truncated last line, which
 :func:`read_results` skips and :class:`ResultsWriter` cuts off before appending again.
@@ -19,6 +21,11 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from capmj.atomic import write_json_atomic
+from capmj.bench.failures import breakdown
+from capmj.bench.migrate import as_record, load_record
+from capmj.bench.spend import usage
+from capmj.errors import RecordError
+from capmj.records import Episode, EpisodeRecord, Key
 
 EPISODES = "episodes.jsonl"
 CONFIG = "config.json"
@@ -29,23 +36,23 @@ SUMMARY_SCHEMA = "capmj.bench-summary/1"
 REQUIRED_KEYS: tuple[str, ...] = ("task", "seed", "agent", "model", "success", "progress", "primitives",
                                   "wall_s", "error", "rrd")
 
-Key = tuple[str, int, str, "str | None"]
 
 
-def episode_key(rec: Mapping[str, Any]) -> Key:
+def episode_key(rec: Episode) -> Key:
     """The identity of an episode in a grid: (task, seed, agent, model)."""
-    return (str(rec["task"]), int(rec["seed"]), str(rec["agent"]), rec.get("model"))
+    return rec.key
 
 
-def read_results(path: str | Path) -> tuple[list[dict[str, Any]], int]:
-    """The complete records of a jsonl file and the number of lines skipped (truncated/corrupt).
+def read_records(path: str | Path) -> tuple[list[EpisodeRecord], int]:
+    """The complete records of a jsonl file and the number of lines skipped (truncated, corrupt,
+    or not a record).
 
     A missing file is empty.  When the same key appears twice (should not happen) the last wins.
     """
     path = Path(path)
     if not path.exists():
         return [], 0
-    records: dict[Key, dict[str, Any]] = {}
+    records: dict[Key, EpisodeRecord] = {}
     bad = 0
     with open(path, "rb") as f:
         data = f.read()
@@ -53,13 +60,18 @@ def read_results(path: str | Path) -> tuple[list[dict[str, Any]], int]:
         if not raw.strip():
             continue
         try:
-            rec = json.loads(raw)
-            key = episode_key(rec)
-        except (ValueError, KeyError, TypeError):
+            rec = load_record(json.loads(raw))
+        except (ValueError, RecordError):
             bad += 1
             continue
-        records[key] = rec
+        records[rec.key] = rec
     return list(records.values()), bad
+
+
+def read_results(path: str | Path) -> tuple[list[dict[str, Any]], int]:
+    """:func:`read_records` as today's JSON dicts (for scripts that index lines by key)."""
+    records, bad = read_records(path)
+    return [r.to_dict() for r in records], bad
 
 
 class ResultsWriter:
@@ -83,7 +95,9 @@ class ResultsWriter:
             f.flush()
             os.fsync(f.fileno())
 
-    def write(self, record: Mapping[str, Any]) -> None:
+    def write(self, record: EpisodeRecord | Mapping[str, Any]) -> None:
+        if isinstance(record, EpisodeRecord):
+            record = record.to_dict()
         line = (json.dumps(record, sort_keys=True, allow_nan=False, default=_json_default) + "\n").encode()
         view = memoryview(line)
         while view:  # os.write on a regular file writes everything in practice; loop for safety
@@ -136,21 +150,18 @@ def wilson(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float,
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def stats(records: Sequence[EpisodeRecord]) -> dict[str, Any]:
     """n, successes, success rate with its 95 % Wilson interval, means and wall-time totals; for
     LLM episodes also ``loop`` (:func:`loop_stats`: verdicts, reporter accuracy, re-plans, tokens)."""
     n = len(records)
-    k = sum(1 for r in records if r.get("success") is True)
+    k = sum(1 for r in records if r.success)
     lo, hi = wilson(k, n)
 
-    def mean(field: str) -> float | None:
-        vals = [float(r[field]) for r in records if isinstance(r.get(field), (int, float))]
+    def mean(values: Iterable[float | None]) -> float | None:
+        vals = [float(v) for v in values if v is not None]
         return sum(vals) / len(vals) if vals else None
 
-    wall = [float(r["wall_s"]) for r in records if isinstance(r.get("wall_s"), (int, float))]
-    from capmj.bench.failures import breakdown
-    from capmj.bench.spend import usage
-
+    wall = [float(r.wall_s) for r in records if r.wall_s is not None]
     out = {
         "failures": breakdown(records),
         "llm_usage": usage(records),
@@ -158,10 +169,10 @@ def stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         "successes": k,
         "success_rate": k / n if n else None,
         "ci95": [lo, hi],
-        "mean_progress": mean("progress"),
-        "mean_primitives": mean("primitives"),
-        "mean_sim_s": mean("sim_s"),
-        "errors": sum(1 for r in records if r.get("error")),
+        "mean_progress": mean(r.progress for r in records),
+        "mean_primitives": mean(r.primitives for r in records),
+        "mean_sim_s": mean(r.sim_s for r in records),
+        "errors": sum(1 for r in records if r.error),
         "wall_s_total": sum(wall),
         "wall_s_mean": sum(wall) / len(wall) if wall else None,
     }
@@ -175,15 +186,8 @@ def _share(k: int, n: int) -> float | None:
     return k / n if n else None
 
 
-def _extra_requests(attempt: Mapping[str, Any]) -> int:
-    n = attempt.get("extra_requests")
-    if isinstance(n, int) and not isinstance(n, bool):
-        return n
-    return int(bool(attempt.get("extra_request")))  # records written before retries: one at most
-
-
-def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
-    """The closed loop of LLM episodes (``record["llm"]["attempts"]``); None without any.
+def loop_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
+    """The closed loop of LLM episodes (``record.llm.attempts``); None without any.
 
     Reporter accuracy compares each attempt's reporter verdict with the task predicate evaluated
     on the same state (both recorded per attempt by the LLM agent): ``agree`` when equal,
@@ -196,26 +200,21 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     written before retries existed count their ``extra_request`` flag as one).  Tokens are prompt +
     completion per episode.
     """
-    eps = [r for r in records if isinstance((r.get("llm") or {}).get("attempts"), list)]
+    eps = [r for r in records if r.llm is not None]
     if not eps:
         return None
-    attempts = [a for r in eps for a in r["llm"]["attempts"] if isinstance(a, Mapping)]
-    judged = [a for a in attempts if a.get("verdict_source") is not None]
-    reached = [a for a in judged if isinstance(a.get("verdict"), bool)]
-    compared = [a for a in reached if isinstance(a.get("predicate"), bool)]
-    agree = sum(a["verdict"] is a["predicate"] for a in compared)
-    fp = sum(a["verdict"] is True and a["predicate"] is False for a in compared)
-    fn = sum(a["verdict"] is False and a["predicate"] is True for a in compared)
-    sources = {src: sum(a.get("verdict_source") == src for a in judged) for src in ("code", "repair", "direct", "unknown")}
-    replans = [a for a in attempts if a.get("code_differs") is not None]
-    identical = sum(a["code_differs"] is False for a in replans)
-
-    def tokens(r: Mapping[str, Any], field: str) -> int:
-        v = r["llm"].get(field)
-        return int(v) if isinstance(v, (int, float)) else 0
-
-    prompt = [tokens(r, "prompt_tokens") for r in eps]
-    completion = [tokens(r, "completion_tokens") for r in eps]
+    attempts = [a for r in eps for a in r.llm_attempts]
+    judged = [a for a in attempts if a.verdict_source is not None]
+    reached = [a for a in judged if a.verdict is not None]
+    compared = [a for a in reached if a.predicate is not None]
+    agree = sum(a.verdict is a.predicate for a in compared)
+    fp = sum(a.verdict is True and a.predicate is False for a in compared)
+    fn = sum(a.verdict is False and a.predicate is True for a in compared)
+    sources = {src: sum(a.verdict_source == src for a in judged) for src in ("code", "repair", "direct", "unknown")}
+    replans = [a for a in attempts if a.code_differs is not None]
+    identical = sum(a.code_differs is False for a in replans)
+    prompt = [r.llm.prompt_tokens for r in eps if r.llm is not None]
+    completion = [r.llm.completion_tokens for r in eps if r.llm is not None]
     n = len(eps)
     return {
         "episodes": n,
@@ -225,7 +224,7 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
         "verdicts": len(reached),
         "verdict_rate": _share(len(reached), len(judged)),
         "verdict_sources": sources,
-        "unknown_stops": sum(a.get("on_unknown") == "stop" for a in attempts),
+        "unknown_stops": sum(a.on_unknown == "stop" for a in attempts),
         "compared": len(compared),
         "agree": agree,
         "false_positives": fp,
@@ -234,8 +233,8 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
         "replans": len(replans),
         "identical_replans": identical,
         "identical_replan_rate": _share(identical, len(replans)),
-        "not_rerun": sum(bool(a.get("not_run")) for a in replans),
-        "extra_requests": sum(_extra_requests(a) for a in attempts),
+        "not_rerun": sum(bool(a.not_run) for a in replans),
+        "extra_requests": sum(a.extra_requests for a in attempts),
         "tokens_total": sum(prompt) + sum(completion),
         "mean_tokens": (sum(prompt) + sum(completion)) / n,
         "mean_prompt_tokens": sum(prompt) / n,
@@ -243,32 +242,33 @@ def loop_stats(records: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     }
 
 
-def config_of(rec: Mapping[str, Any]) -> tuple[str, str | None]:
-    return (str(rec.get("agent")), rec.get("model"))
+def config_of(rec: Episode) -> tuple[str, str | None]:
+    return (rec.agent, rec.model)
 
 
 def default_label(agent: str, model: str | None) -> str:
     return agent if not model else f"{agent} {model}"
 
 
-def summarize(records: Iterable[Mapping[str, Any]],
-              label_of: Callable[[Mapping[str, Any]], str] | None = None) -> dict[str, Any]:
+def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
+              label_of: Callable[[EpisodeRecord], str] | None = None) -> dict[str, Any]:
     """Per-task and overall statistics for each configuration found in ``records``.
 
     A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
     per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
     :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for.
+    Parsed lines (dicts) are loaded as records first (:func:`capmj.bench.migrate.as_record`).
     """
-    recs = list(records)
+    recs = [as_record(r) for r in records]
     configs: dict[str, dict[str, Any]] = {}
-    by: dict[str, dict[str, list]] = {}
-    overall: dict[str, list] = {}
+    by: dict[str, dict[str, list[EpisodeRecord]]] = {}
+    overall: dict[str, list[EpisodeRecord]] = {}
     tasks: list[str] = []
     for r in recs:
         cfg = config_of(r)
         label = label_of(r) if label_of else default_label(*cfg)
         configs.setdefault(label, {"agent": cfg[0], "model": cfg[1]})
-        t = str(r["task"])
+        t = r.task
         if t not in tasks:
             tasks.append(t)
         by.setdefault(t, {}).setdefault(label, []).append(r)
@@ -297,7 +297,8 @@ def write_result_json(path: str | Path, data: Any) -> None:
 
 __all__ = [
     "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
-    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "read_results", "sanitize", "stats",
+    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "read_records", "read_results", "sanitize",
+    "stats",
     "summarize",
     "wilson", "write_result_json",
 ]

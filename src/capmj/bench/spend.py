@@ -17,24 +17,22 @@ from dataclasses import dataclass
 from typing import Any, Iterable, Mapping, Sequence
 
 from capmj.errors import ConfigError
+from capmj.records import Episode
 
 __all__ = ["BudgetTracker", "RunBudget", "fmt_cost", "usage", "usage_of"]
 
 
-def usage_of(rec: Mapping[str, Any]) -> dict[str, Any] | None:
+def usage_of(rec: Episode) -> dict[str, Any] | None:
     """``{"calls", "tokens", "cost_usd"}`` of one episode; None for an episode without an LLM."""
-    llm = rec.get("llm") or {}
-    if not llm:
+    llm = rec.llm
+    if llm is None:
         return None
-    spend = llm.get("spend")
-    if isinstance(spend, Mapping):
-        return {"calls": int(spend.get("calls") or 0), "tokens": int(spend.get("tokens") or 0),
-                "cost_usd": spend.get("cost_usd")}
-    tokens = int(llm.get("prompt_tokens") or 0) + int(llm.get("completion_tokens") or 0)
-    return {"calls": int(llm.get("calls") or 0), "tokens": tokens, "cost_usd": None}
+    if llm.spend is not None:
+        return {"calls": llm.spend.calls, "tokens": llm.spend.tokens, "cost_usd": llm.spend.cost_usd}
+    return {"calls": llm.calls, "tokens": llm.prompt_tokens + llm.completion_tokens, "cost_usd": None}
 
 
-def usage(records: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
+def usage(records: Iterable[Episode]) -> dict[str, Any]:
     """Totals and per-episode means; ``cost_usd`` None (unknown) if any episode's cost is unknown."""
     per = [u for u in (usage_of(r) for r in records) if u is not None]
     if not per:
@@ -92,7 +90,7 @@ class RunBudget:
     def active(self) -> bool:
         return self.max_cost_usd is not None or self.max_tokens is not None
 
-    def exceeded(self, records: Iterable[Mapping[str, Any]]) -> str | None:
+    def exceeded(self, records: Iterable[Episode]) -> str | None:
         """Why the run must stop (a sentence), or None while it is within its limits."""
         u = usage(records)
         if self.max_tokens is not None and u["tokens"] >= self.max_tokens:
@@ -108,12 +106,12 @@ class RunBudget:
 class BudgetTracker:
     """The grid's stop condition: records of the folder so far, checked before each new episode."""
 
-    def __init__(self, budget: RunBudget, existing: Sequence[Mapping[str, Any]]) -> None:
+    def __init__(self, budget: RunBudget, existing: Sequence[Episode]) -> None:
         self.budget = budget
-        self.records: list[Mapping[str, Any]] = list(existing)
+        self.records: list[Episode] = list(existing)
         self.reason: str | None = None
 
-    def add(self, rec: Mapping[str, Any]) -> None:
+    def add(self, rec: Episode) -> None:
         self.records.append(rec)
 
     def stop(self) -> bool:

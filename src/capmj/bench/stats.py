@@ -11,7 +11,11 @@ seeds, often a handful of discordant pairs) where the chi-squared approximation 
 from __future__ import annotations
 
 from math import comb
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Sequence, TypeVar
+
+from capmj.records import Episode
+
+R = TypeVar("R", bound=Episode)
 
 __all__ = ["ALPHA", "mcnemar_exact", "paired_comparison"]
 
@@ -42,8 +46,7 @@ def _cell(pairs: Sequence[tuple[bool, bool]]) -> dict[str, Any]:
             "difference": (a - b_) / n if n else None, "p_value": p, "significant": p < ALPHA}
 
 
-def paired_comparison(records: Sequence[Mapping[str, Any]], label_of: Callable[[Mapping[str, Any]], str],
-                      a: str, b: str) -> dict[str, Any]:
+def paired_comparison(records: Sequence[R], label_of: Callable[[R], str], a: str, b: str) -> dict[str, Any]:
     """Per-task and overall paired statistics of configuration ``a`` against ``b``.
 
     Only (task, seed) pairs both configurations ran are compared; the others are counted in
@@ -53,7 +56,7 @@ def paired_comparison(records: Sequence[Mapping[str, Any]], label_of: Callable[[
     for r in records:
         lab = label_of(r)
         if lab in outcome:
-            outcome[lab][(str(r["task"]), int(r["seed"]))] = r.get("success") is True
+            outcome[lab][(r.task, r.seed)] = r.success
     common = sorted(set(outcome[a]) & set(outcome[b]))
     unpaired = len(set(outcome[a]) ^ set(outcome[b]))
     by_task: dict[str, list[tuple[bool, bool]]] = {}

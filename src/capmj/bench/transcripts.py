@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from capmj.atomic import atomic_write
+from capmj.records import Episode, EpisodeRecord
 
 __all__ = ["read_calls", "transcript_relpath", "write_calls"]
 
@@ -25,24 +26,23 @@ def transcript_relpath(task: str, seed: int, agent: str, model: str | None) -> s
     return "transcripts/" + rrd_relpath(task, seed, agent, model)[len("rrd/"):-len(".rrd")] + ".jsonl"
 
 
-def write_calls(out_dir: str | Path, rec: dict[str, Any]) -> None:
-    """Move ``rec["calls"]`` into the episode's transcript file (``rec["transcript"]`` names it)."""
-    calls = rec.pop("calls", None)
-    if not calls:
-        return
-    rel = transcript_relpath(rec["task"], rec["seed"], rec["agent"], rec.get("model"))
+def write_calls(out_dir: str | Path, result: Episode) -> str | None:
+    """Write ``result.calls`` into the episode's transcript file; its path relative to ``out_dir``
+    (what the record's ``transcript`` holds), None for an episode without LLM calls."""
+    if not result.calls:
+        return None
+    rel = transcript_relpath(result.task, result.seed, result.agent, result.model)
     path = Path(out_dir) / rel
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path, encoding="utf-8") as f:
-        for call in calls:
+        for call in result.calls:
             f.write(json.dumps(call, sort_keys=True, ensure_ascii=False) + "\n")
-    rec["transcript"] = rel
+    return rel
 
 
-def read_calls(out_dir: str | Path, rec: Mapping[str, Any]) -> list[dict[str, Any]]:
+def read_calls(out_dir: str | Path, rec: EpisodeRecord) -> list[dict[str, Any]]:
     """The calls of one episode record ([] for an episode without LLM calls)."""
-    rel = rec.get("transcript")
-    if not rel:
-        return list(rec.get("calls") or [])
-    with open(Path(out_dir) / rel, encoding="utf-8") as f:
+    if not rec.transcript:
+        return [dict(c) for c in rec.calls]  # lines written before transcripts held them inline
+    with open(Path(out_dir) / rec.transcript, encoding="utf-8") as f:
         return [json.loads(line) for line in f if line.strip()]

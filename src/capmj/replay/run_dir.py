@@ -7,8 +7,7 @@ import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
-
+from capmj.records import EpisodeRecord
 from capmj.replay.reader import ReplayError
 
 
@@ -22,32 +21,30 @@ class FailedEpisode:
     rrd: Path | None         # absolute path of the log, None when the run logged nothing
 
 
-def _why(rec: Mapping[str, Any]) -> str:
-    diags = rec.get("diagnostics") or []
+def _why(rec: EpisodeRecord) -> str:
+    diags = rec.diagnostics
     if diags:
         return str(diags[0]) + (f" (+{len(diags) - 1} more)" if len(diags) > 1 else "")
-    return str(rec.get("error") or "-")
+    return rec.error or "-"
 
 
 def failed_episodes(run_dir: str | Path) -> tuple[list[FailedEpisode], int]:
     """The failed episodes recorded in ``RUN_DIR/episodes.jsonl`` (task/seed order) and the number
     of episodes recorded."""
-    from capmj.bench.results import EPISODES, read_results
+    from capmj.bench.results import EPISODES, read_records
 
     run = Path(run_dir)
     path = run / EPISODES
     if not path.is_file():
         raise ReplayError(f"{run} is not a benchmark run folder: no {EPISODES} in it "
                           f"(write one with python -m capmj.bench ... --out {run})")
-    records, _ = read_results(path)
+    records, _ = read_records(path)
     out = []
     for r in records:
-        if r.get("success"):
+        if r.success:
             continue
-        rrd = r.get("rrd")
-        p = None if not rrd else (Path(rrd) if Path(rrd).is_absolute() else run / rrd)
-        out.append(FailedEpisode(str(r.get("task")), int(r.get("seed", 0)), str(r.get("agent")), r.get("model"),
-                                 _why(r), p))
+        p = None if not r.rrd else (Path(r.rrd) if Path(r.rrd).is_absolute() else run / r.rrd)
+        out.append(FailedEpisode(r.task, r.seed, r.agent, r.model, _why(r), p))
     return sorted(out, key=lambda e: (e.task, e.seed, e.agent, e.model or "")), len(records)
 
 

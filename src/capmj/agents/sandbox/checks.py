@@ -16,7 +16,7 @@ import ast
 import copy
 
 from capmj.confine.names import FORBIDDEN_ATTRIBUTES
-from capmj.errors import PlanError
+from capmj.errors import PlanError, PlanSyntaxError, SandboxViolation
 
 FORBIDDEN_NAMES = frozenset({
     "exec", "eval", "compile", "open", "globals", "locals", "vars", "dir", "getattr", "setattr",
@@ -85,7 +85,7 @@ def _check_node(node: ast.AST, line: int | None, bound: set[str], code: str) -> 
     line = getattr(node, "lineno", None) or line
 
     def reject(message: str) -> None:
-        raise PlanError(f"SandboxViolation: {message}", line=line, code=code)
+        raise SandboxViolation(f"SandboxViolation: {message}", line=line, code=code)
 
     if not isinstance(node, _ALLOWED_NODES):
         kind = type(node)
@@ -122,13 +122,13 @@ def check_code(code: str) -> ast.Module:
     try:
         tree = ast.parse(code, mode="exec")
     except SyntaxError as exc:
-        raise PlanError(f"SyntaxError: {exc.msg}", line=exc.lineno, code=code) from None
+        raise PlanSyntaxError(f"SyntaxError: {exc.msg}", line=exc.lineno, code=code) from None
     except (ValueError, RecursionError, MemoryError) as exc:
-        raise PlanError(f"SyntaxError: {exc}", code=code) from None
+        raise PlanSyntaxError(f"SyntaxError: {exc}", code=code) from None
     try:
         _check_node(tree, None, bound_names(tree), code)
     except RecursionError:
-        raise PlanError("SandboxViolation: code is nested too deeply", code=code) from None
+        raise SandboxViolation("SandboxViolation: code is nested too deeply", code=code) from None
     return tree
 
 

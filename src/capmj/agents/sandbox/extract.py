@@ -12,7 +12,7 @@ import ast
 import re
 import textwrap
 
-from capmj.errors import PlanError
+from capmj.errors import NoCodeError
 
 _FENCE = re.compile(r"```[ \t]*([\w+.-]*)[^\n]*\n(.*?)(?:```|\Z)", re.DOTALL)
 _CODE_LINE = re.compile(
@@ -39,7 +39,7 @@ def extract_code(completion_text: str) -> str:
     runs to the end.  Raises PlanError("no code in completion") for prose-only answers.
     """
     if not isinstance(completion_text, str) or not completion_text.strip():
-        raise PlanError("no code in completion")
+        raise NoCodeError("no code in completion")
     blocks = [(lang.lower(), body) for lang, body in _FENCE.findall(completion_text)]
     if blocks:
         tagged = [b for lang, b in blocks if lang in ("python", "py", "python3")]
@@ -47,8 +47,8 @@ def extract_code(completion_text: str) -> str:
         code = "\n\n".join(textwrap.dedent(b).strip("\n") for b in chosen if b.strip())
         if code.strip():
             return code + "\n"
-        raise PlanError("no code in completion")
+        raise NoCodeError("no code in completion")
     raw = textwrap.dedent(completion_text).strip("\n")
     if _looks_like_code(raw):
         return raw + "\n"
-    raise PlanError("no code in completion")
+    raise NoCodeError("no code in completion")

@@ -34,7 +34,7 @@ from capmj.agents.sandbox.checks import _Rewriter, check_code
 from capmj.agents.sandbox.facades import (_builtins, _checked_op, _Facade, _facades, _growth,
                                           _TypeCheck, _wraps)
 from capmj.agents.sandbox.ordered import OrderedSet
-from capmj.errors import BudgetExceeded, ConfigError, PlanError
+from capmj.errors import BudgetExceeded, ConfigError, PlanError, PlanSyntaxError, SandboxViolation, error_name
 
 MAX_INT_BITS = 1_000_000
 """Largest integer result (in bits) that ``**``, ``<<`` and ``*`` may produce."""
@@ -334,7 +334,7 @@ def _describe(exc: BaseException) -> str:
         quoted = _quote(code, line)
         return f"in {where}" + (f": `{quoted}`" if quoted else "") + f": {exc.detail}"  # type: ignore[attr-defined]
     detail = str(exc) if str(exc) else repr(exc)
-    return f"{type(exc).__name__}: {detail}"
+    return f"{error_name(exc)}: {detail}"
 
 
 def _execute(session: _Session, thunk: Callable[[], Any]) -> Any:
@@ -396,14 +396,14 @@ def run_code(code: str, env: Mapping[str, object], *, budget: SandboxBudget = Sa
         if program is None:
             raise
         message = str(exc)[len(f"line {exc.line}: "):] if exc.line is not None else str(exc)
-        raise located_error(PlanError, message, line=exc.line, code=code, program=program) from None
+        raise located_error(type(exc), message, line=exc.line, code=code, program=program) from None
     try:
         compiled = compile(ast.fix_missing_locations(_Rewriter().visit(tree)), filename, "exec")
     except SyntaxError as exc:  # e.g. 'return' outside function, found only by the compiler
-        raise located_error(PlanError, f"SyntaxError: {exc.msg}", line=exc.lineno, code=code,
+        raise located_error(PlanSyntaxError, f"SyntaxError: {exc.msg}", line=exc.lineno, code=code,
                             program=program) from None
     except (RecursionError, MemoryError):
-        raise PlanError("SandboxViolation: code is nested too deeply", code=code) from None
+        raise SandboxViolation("SandboxViolation: code is nested too deeply", code=code) from None
     session = _Session(budget, filename, code, program)
     namespace: dict[str, object] = {"__builtins__": _builtins(session, output),
                                     "__name__": "__llm_plan__"}

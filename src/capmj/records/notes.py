@@ -1,0 +1,89 @@
+"""What the LLM agent records about an episode (``llm`` of a result): its options, usage, spend and
+attempts.
+
+Why typed: these keys were written by the agent key by key and read back by four modules with
+``.get`` fallbacks, so a renamed key failed silently.  Now the agent builds an :class:`LLMNotes` and
+the readers use its attributes; a stored line that does not match is a
+:class:`~capmj.errors.RecordError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from capmj.records.attempt import AttemptRecord
+from capmj.records.codec import from_plain, to_plain
+
+__all__ = ["LLMNotes", "Spend", "SpendLimits"]
+
+
+@dataclass(frozen=True)
+class SpendLimits:
+    """The episode's LLM limits (None: none)."""
+
+    tokens: int | None = None
+    cost_usd: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_plain(self)
+
+    @classmethod
+    def from_dict(cls, data: Any, *, strict: bool = True) -> "SpendLimits":
+        return from_plain(cls, data, strict=strict)
+
+
+@dataclass(frozen=True)
+class Spend:
+    """Nominal LLM usage of one episode (:meth:`capmj.agents.llm_meter.LLMMeter.summary`):
+    ``cost_usd`` is None when the model's price is unknown."""
+
+    calls: int = 0
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    tokens: int = 0
+    cost_usd: float | None = None
+    price_source: str = "unknown"
+    limits: SpendLimits = SpendLimits()
+    exceeded: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_plain(self)
+
+    @classmethod
+    def from_dict(cls, data: Any, *, strict: bool = True) -> "Spend":
+        return from_plain(cls, data, strict=strict)
+
+
+@dataclass(frozen=True)
+class LLMNotes:
+    """The LLM agent's record of one episode: options, client usage, why it stopped, attempts."""
+
+    model: str
+    reporter: str = "none"
+    max_attempts: int = 1
+    on_unknown: str = "replan"
+    temperature: float = 0.0
+    replan_temperature: float = 0.0
+    replan_retries: int = 0
+    attempts: tuple[AttemptRecord, ...] = ()
+    calls: int = 0
+    cached_calls: int = 0
+    failed_calls: int = 0
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    cost_usd: float = 0.0
+    latency_s: float = 0.0
+    stopped: str | None = None
+    spend: Spend | None = None
+
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"stopped", "spend"})
+    """Keys absent until the loop stops / the episode's spend is summed up (an agent that raised
+    before that)."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_plain(self)
+
+    @classmethod
+    def from_dict(cls, data: Any, *, strict: bool = True) -> "LLMNotes":
+        return from_plain(cls, data, strict=strict)
