@@ -491,5 +491,5 @@ def test_a_plan_running_on_into_the_next_example_is_cut_at_the_stop_sequence(ser
     planner_requests = [r for r in server.requests if lmp_of(r) == "planner"]
     assert planner_requests[0]["stop"] == ["\n\nobjects = ["]
     assert all(r["stop"] == ["\n\n# define function:"] for r in server.requests if lmp_of(r) == "parse_function")
-    (first,) = result.llm["attempts"]
-    assert "obj_id 7" not in (first["code"] or "") and "not_a_function" not in (first["code"] or "")
+    (first,) = result.llm.attempts
+    assert "obj_id 7" not in (first.code or "") and "not_a_function" not in (first.code or "")
