@@ -11,9 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import site
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -24,6 +22,7 @@ from capmj.generate.package import TEST_FILE
 from capmj.generate.static import extract_code, static_checks
 from generator_script import GeneratorScript, candidate
 from llm_stub_server import StubLLMServer
+from venvs import make_venv, pip_install
 
 PACKAGE = "capmj-generated-test"
 GOOD = "put-blocks-in-zone-of-same-color"
@@ -86,19 +85,6 @@ def test_cli_refuses_a_non_empty_out(tmp_path, capsys):
 
 
 # --------------------------------------------------------------------------------------- good task
-def _venv_with_this_environment(root: Path) -> Path:
-    """A fresh virtualenv that also sees this interpreter's site-packages (capmj, wheel)."""
-    venv = root / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", "--without-pip", str(venv)],
-                   check=True, timeout=120)
-    py = venv / "bin" / "python"
-    target = subprocess.run([str(py), "-c", "import site; print(site.getsitepackages()[0])"], capture_output=True,
-                            text=True, check=True).stdout.strip()
-    dirs = [d for d in site.getsitepackages() if Path(d).is_dir()]
-    Path(target, "zz_parent_env.pth").write_text("".join(f"import site; site.addsitedir({d!r})\n" for d in dirs))
-    return py
-
-
 def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
     script = GeneratorScript([candidate("broken_syntax.py", repair="good_zone_color.py", name=GOOD)])
     with StubLLMServer(responder=script) as server:
@@ -143,11 +129,9 @@ def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
         assert json.loads((again.out / "generation.jsonl").read_text())["usage"]["cached_calls"] == 4
 
     # install into a fresh virtualenv; the registry lists it and a bench grid solves it with the oracle
-    py = _venv_with_this_environment(tmp_path)
+    py = make_venv(tmp_path / "venv")
     env = {k: v for k, v in os.environ.items() if k not in ("CAPMJ_DISABLE_PLUGINS", "PYTHONPATH")}
-    pip = subprocess.run([sys.executable, "-m", "pip", "--python", str(py), "install", "--quiet", "--no-deps",
-                          "--no-build-isolation", "--no-index", "--disable-pip-version-check", "-e", str(out)],
-                         capture_output=True, text=True, timeout=300, env=env)
+    pip = pip_install(py, "--no-build-isolation", "-e", str(out), env=env)
     assert pip.returncode == 0, pip.stderr
     listed = subprocess.run([str(py), "-m", "capmj.bench", "--list"], capture_output=True, text=True, timeout=120,
                             env=env, cwd=tmp_path)

@@ -1,38 +1,56 @@
 """A built wheel works on its own: installed into a fresh virtualenv, run from outside the source tree.
 
-The wheel must carry the prompt files and the world's MJCF (package data); an editable install
-cannot show that, because the source tree is right there.  The virtualenv borrows the heavy
-dependencies from the interpreter's site-packages (``--system-site-packages``) and the wheel is
+The wheel must carry every prompt file (the planner's, the reference plans, the generator's) and
+the world's MJCF (package data); an editable install cannot show that, because the source tree is
+right there.  The virtualenv borrows the heavy dependencies from the running interpreter -- its
+virtualenv or the system Python, whichever holds them (``tests/venvs.py``) -- and the wheel is
 installed with ``--no-deps``, so the test needs no index beyond the wheel build itself.
+
+Also here: every distribution the package and its tests import is declared in ``pyproject.toml``
+(an undeclared one works in the developer's environment, where something else pulled it in, and
+breaks for the user whose resolver did not).
 """
 
 from __future__ import annotations
 
+import ast
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
+import tomllib
+import zipfile
+from importlib.metadata import packages_distributions
 from pathlib import Path
 
 import pytest
 
+from generator_script import GeneratorScript, candidate
+from llm_stub_server import StubLLMServer
+from venvs import make_venv
+
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ("pyproject.toml", "README.md", "src", "task_plugins", "prompts", "mjcf")
+DATA = ("prompts", "mjcf")  # top-level folders shipped as capmj/<folder>/ package data
 TASK, SEED = "stack-all-blocks-on-a-zone", 10001
+GOOD, GOAL = "put-blocks-in-zone-of-same-color", "Put every block in the zone of its color."
+DEMO_SIZE = ("32", "24")  # width, height: tiny images, the layout and determinism are what is tested
 
 EPISODES = """
 import json, sys
 import capmj, capmj_tasks
 from capmj.agents.oracle import OracleAgent
 from capmj.agents.reference import ReferenceAgent, reference_plan
+from capmj.generate.prompts import generator_dir
 from capmj.resources import mjcf_path, prompts_dir
 from capmj.runner import run_episode
 from capmj.tasks.registry import get_task
 
 task = get_task(sys.argv[1])
 out = {"files": [capmj.__file__, capmj_tasks.__file__, reference_plan(task)[1], str(prompts_dir()),
-                 str(mjcf_path("table.xml"))]}
+                 str(generator_dir()), str(mjcf_path("table.xml"))]}
 for agent in (ReferenceAgent(), OracleAgent()):
     r = run_episode(task, int(sys.argv[2]), agent)
     out[agent.name] = [r.success, r.error, r.primitives, r.sim_s]
@@ -72,26 +90,42 @@ def wheel(tmp_path_factory) -> Path:
     return whl
 
 
-def test_wheel_runs_reference_and_oracle_outside_the_source_tree(wheel, tmp_path):
-    import zipfile
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory) -> tuple[Path, dict[str, str]]:
+    """The python of a fresh virtualenv holding the wheel, and an environment that hides the source tree."""
+    venv = tmp_path_factory.mktemp("wheel-venv") / "venv"
+    py = make_venv(venv, own=[str(wheel)])
+    drop = ("PYTHONPATH", "CAPMJ_PROMPTS_DIR", "CAPMJ_LLM_CACHE", "CAPMJ_DISABLE_PLUGINS")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env["LITELLM_LOCAL_MODEL_COST_MAP"] = "True"  # no cost-map download at import
+    where = subprocess.run([str(py), "-c", "import capmj; print(capmj.__file__)"], cwd=venv, env=env,
+                           capture_output=True, text=True, timeout=120)
+    assert Path(where.stdout.strip()).resolve().is_relative_to(venv.resolve()), where.stdout + where.stderr
+    return py, env
 
+
+def _run(py: Path, args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([str(py), *args], cwd=cwd, env=env, timeout=600, capture_output=True, text=True)
+
+
+def test_wheel_ships_every_prompt_and_mjcf_file(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    assert f"capmj/prompts/reference/{TASK}.py" in names and "capmj/prompts/system.txt" in names
-    assert "capmj/mjcf/table.xml" in names and "capmj/mjcf/fixture.xml" in names
-    assert not any(n.startswith("capmj/prompts/") and n.endswith("__init__.py") for n in names)
+    for folder in DATA:
+        files = [p for p in (ROOT / folder).rglob("*") if p.is_file() and "__pycache__" not in p.parts]
+        assert files, folder
+        missing = [str(p.relative_to(ROOT)) for p in files
+                   if f"capmj/{folder}/{p.relative_to(ROOT / folder).as_posix()}" not in names]
+        assert not missing, f"not in the wheel: {missing}"
+    assert "capmj/prompts/generator/system.txt" in names and "capmj/mjcf/table.xml" in names
+    assert not any(n.startswith(("capmj/prompts/", "capmj/mjcf/")) and n.endswith("__init__.py") for n in names)
 
-    venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True, timeout=120)
-    py = venv / "bin" / "python"
-    subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", "--no-index", str(wheel)],
-                   check=True, timeout=300)
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "CAPMJ_PROMPTS_DIR")}
-    env.update(PYTHONNOUSERSITE="1", LITELLM_LOCAL_MODEL_COST_MAP="True")
-    run = subprocess.run([str(py), "-c", EPISODES, TASK, str(SEED)], cwd=tmp_path, env=env, timeout=300,
-                         capture_output=True, text=True)
+
+def test_wheel_runs_reference_and_oracle_outside_the_source_tree(installed, tmp_path):
+    py, env = installed
+    run = _run(py, ["-c", EPISODES, TASK, str(SEED)], tmp_path, env)
     assert run.returncode == 0, run.stderr
     got = json.loads(run.stdout.strip().splitlines()[-1])
-    site = (venv / "lib").resolve()
+    site = (py.parent.parent / "lib").resolve()
     for f in got["files"]:  # the package, its tasks, a plan, the prompts and the MJCF all come from the wheel
         assert Path(f).resolve().is_relative_to(site), f
         assert not Path(f).resolve().is_relative_to(ROOT), f
@@ -105,3 +139,113 @@ def test_wheel_runs_reference_and_oracle_outside_the_source_tree(wheel, tmp_path
     for agent in (ReferenceAgent(), OracleAgent()):
         r = run_episode(get_task(TASK), SEED, agent)
         assert got[agent.name] == [True, None, r.primitives, r.sim_s]
+
+
+def test_wheel_generates_a_task_with_its_packaged_prompts(installed, tmp_path):
+    """``python -m capmj.generate`` against a scripted local server: every prompt it sends comes from the
+    wheel's prompts/generator/ (the script recognises the task API text; a missing file is an error)."""
+    py, env = installed
+    out = tmp_path / "gen"
+    with StubLLMServer(responder=GeneratorScript([candidate("good_zone_color.py", name=GOOD)])) as server:
+        run = _run(py, ["-m", "capmj.generate", "--mode", "top-down", "--name", GOOD, "--description", GOAL,
+                        "--model", "openai/stub", "--api-base", server.base_url, "--seeds", "1",
+                        "--accept-rate", "1.0", "--package", "capmj-generated-wheel", "--out", str(out),
+                        "--no-progress"], tmp_path, env)
+        bodies = server.requests
+    assert run.returncode == 0, run.stderr
+    assert f"{GOOD}" in run.stdout and "1 of 1 accepted" in run.stdout, run.stdout
+    line = json.loads((out / "generation.jsonl").read_text())
+    assert line["stage"] == "accepted" and line["usage"]["calls"] == len(bodies) > 0, line
+    system = (ROOT / "prompts" / "generator" / "system.txt").read_text().strip()
+    assert all(b["messages"][0] == {"role": "system", "content": system} for b in bodies)
+    assert f'"{GOOD}" = "capmj_generated_wheel.' in (out / "pyproject.toml").read_text()
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def test_wheel_writes_demonstrations_identical_to_the_source_tree(installed, tmp_path):
+    py, env = installed
+    out = tmp_path / "demos"
+    width, height = DEMO_SIZE
+    run = _run(py, ["-m", "capmj.demos", "--tasks", TASK, "--split", "test", "--n", "1", "--out", str(out),
+                    "--width", width, "--height", height, "--fast-robot", "--no-progress"], tmp_path, env)
+    assert run.returncode == 0, run.stderr
+    stats = json.loads(run.stdout.strip().splitlines()[-1])
+    assert stats["task"] == TASK and stats["saved"] == 1 and stats["steps"] > 0, stats
+
+    from capmj.demos.generate import generate_split
+    from capmj.envs.tabletop import EnvConfig
+    from capmj.sim.cameras import VIEW_CAMERAS
+
+    here = tmp_path / "here"
+    config = EnvConfig(cameras=VIEW_CAMERAS, width=int(width), height=int(height), robot_meshes=False)
+    assert generate_split(TASK, "test", 1, here, config=config).saved == 1
+    wheel_files, source_files = _files(out), _files(here)
+    assert sorted(wheel_files) == sorted(source_files) and wheel_files == source_files
+
+
+# ------------------------------------------------------------------------------ declared imports
+IMPORTERS = ("src/capmj", "task_plugins/capmj_tasks", "tests")
+NOT_IMPORTERS = ("prompts", "mjcf", "generator_candidates")  # LLM-facing text and deliberately bad candidates
+
+
+def _requirement_name(req: str) -> str:
+    match = re.match(r"[A-Za-z0-9][A-Za-z0-9._-]*", req.strip())
+    assert match, req
+    return re.sub(r"[-_.]+", "-", match.group(0)).lower()
+
+
+def _declared() -> set[str]:
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    reqs = [*project["dependencies"], *(r for extra in project["optional-dependencies"].values() for r in extra)]
+    return {_requirement_name(r) for r in reqs}
+
+
+def _catches_import_error(node: ast.Try) -> bool:
+    types = [h.type for h in node.handlers]
+    names = {e.id for t in types for e in (t.elts if isinstance(t, ast.Tuple) else [t]) if isinstance(e, ast.Name)}
+    return bool(names & {"ImportError", "ModuleNotFoundError"})
+
+
+def _third_party_imports() -> dict[str, str]:
+    """Top-level module -> a file importing it, for every absolute import that is not the standard
+    library, not capmj's own and not a sibling test helper; imports in ``try: ... except ImportError``
+    are optional by construction and left out."""
+    own = {"capmj", "capmj_tasks", *(p.stem for p in (ROOT / "tests").glob("*.py"))}
+    found: dict[str, str] = {}
+    for folder in IMPORTERS:
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            if any(part in NOT_IMPORTERS for part in path.relative_to(ROOT).parts):
+                continue
+            tree = ast.parse(path.read_text(), str(path))
+            optional = {id(n) for t in ast.walk(tree) if isinstance(t, ast.Try) and _catches_import_error(t)
+                        for stmt in t.body for n in ast.walk(stmt)}
+            for node in ast.walk(tree):
+                if id(node) in optional:
+                    continue
+                if isinstance(node, ast.Import):
+                    modules = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                    modules = [node.module]
+                else:
+                    continue
+                for module in modules:
+                    top = module.split(".")[0]
+                    if top not in sys.stdlib_module_names and top not in own:
+                        found.setdefault(top, str(path.relative_to(ROOT)))
+    return found
+
+
+def test_every_imported_distribution_is_declared():
+    imports = _third_party_imports()
+    assert {"mujoco", "numpy", "dm_env", "pytest"} <= set(imports)  # the scan sees what it must
+    declared = _declared()
+    providers = packages_distributions()
+    undeclared = {}
+    for module, where in imports.items():
+        dists = {_requirement_name(d) for d in providers.get(module, [module])}  # not installed: its own name
+        if not dists & declared:
+            undeclared[module] = (sorted(dists), where)
+    assert not undeclared, f"imported but not declared in pyproject.toml: {undeclared}"
