@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import socket
 import statistics
 import sys
 import tempfile
@@ -27,7 +26,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from hostile_candidates import CORPUS, NAME, Hostile  # noqa: E402
+from hostile_candidates import CORPUS, Hostile, run_hostile  # noqa: E402
 
 from capmj.generate.config import Limits  # noqa: E402
 from capmj.generate.isolate import run_isolated  # noqa: E402
@@ -38,39 +37,10 @@ GOOD = {"good_zone_color.py": "put-blocks-in-zone-of-same-color", "good_block_in
 LAYERS = {"guard_only": {"os_layer": False}, "os_layer_only": {"guarded": False}, "both": {}}
 
 
-def _processes_mentioning(token: str) -> int:
-    n = 0
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            n += token.encode() in Path(f"/proc/{pid}/cmdline").read_bytes()
-        except OSError:
-            pass
-    return n
-
-
 def _attempt(h: Hostile, layers: dict[str, bool]) -> dict[str, object]:
     with tempfile.TemporaryDirectory(prefix="capmj-hostile-") as tmp:
-        d = Path(tmp)
-        victim = d / "victim"
-        victim.write_text("keep")
-        with socket.socket() as srv:
-            srv.bind(("127.0.0.1", 0))
-            srv.listen()
-            srv.setblocking(False)
-            path = d / "candidate.py"
-            path.write_text(h.module(d / "marker", victim, srv.getsockname()[1]))
-            run = run_isolated(path, name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
-                               limits=Limits(cpu_s=60, wall_s=120), **layers)
-            try:
-                srv.accept()
-                connected = True
-            except BlockingIOError:
-                connected = False
-        traces = [p.name for p in d.iterdir() if p.name not in ("victim", "candidate.py")]
-        traces += ([] if victim.exists() else ["victim removed"]) + (["connection"] if connected else [])
-        if _processes_mentioning(tmp):
-            traces.append("process left running")
-        failed = next((r for r in run.results if r.outcome in ("fail", "error")), None)
+        run, traces = run_hostile(h, Path(tmp), **layers)
+    failed = next((r for r in run.results if r.outcome in ("fail", "error")), None)
     return {"event": (run.violation or {}).get("event"), "check": (run.violation or {}).get("check"),
             "stopped": run.violation is not None or not traces and failed is not None,
             "first_failure": failed.detail[:160] if failed else None, "traces": traces, "os_layer": run.os_layer}

@@ -13,8 +13,11 @@ to stop it — said so in ``docs/security.md``).
 
 from __future__ import annotations
 
+import os
+import socket
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 GOOD = Path(__file__).resolve().parent / "generator_candidates" / "good_zone_color.py"
 NAME = "put-blocks-in-zone-of-same-color"
@@ -131,4 +134,44 @@ CORPUS: tuple[Hostile, ...] = (
 
 BY_ID = {h.id: h for h in CORPUS}
 
-__all__ = ["BY_ID", "CORPUS", "GOOD", "Hostile", "NAME"]
+
+def processes_mentioning(token: str) -> list[str]:
+    """Command lines of running processes that contain ``token`` (a run's folder)."""
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if token in cmd:
+            found.append(cmd)
+    return found
+
+
+def run_hostile(hostile: Hostile, folder: Path, **layers: bool) -> tuple[Any, list[str]]:
+    """Check ``hostile`` in the real worker (static check bypassed; ``layers`` as for
+    ``run_isolated``) inside ``folder``; returns the run and every trace its door left."""
+    from capmj.generate.config import Limits
+    from capmj.generate.isolate import run_isolated
+
+    victim = folder / "victim"
+    victim.write_text("keep me")
+    with socket.socket() as srv:
+        srv.bind(("127.0.0.1", 0))
+        srv.listen()
+        srv.setblocking(False)
+        path = folder / "candidate.py"
+        path.write_text(hostile.module(folder / "marker", victim, srv.getsockname()[1]))
+        run = run_isolated(path, name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
+                           limits=Limits(cpu_s=60, wall_s=120), **layers)
+        try:
+            srv.accept()
+            connected = ["a connection reached the listening socket"]
+        except BlockingIOError:
+            connected = []
+    traces = [p.name for p in folder.iterdir() if p.name not in ("victim", "candidate.py")]
+    traces += [] if victim.exists() else ["the victim file was removed"]
+    return run, traces + connected + processes_mentioning(str(folder))
+
+
+__all__ = ["BY_ID", "CORPUS", "GOOD", "Hostile", "NAME", "processes_mentioning", "run_hostile"]

@@ -12,7 +12,6 @@ from __future__ import annotations
 import ast
 import importlib
 import os
-import socket
 from pathlib import Path
 from types import ModuleType
 
@@ -21,11 +20,9 @@ import pytest
 from capmj.confine import allowlist
 from capmj.confine.guard import opens_for_writing
 from capmj.confine.names import name_findings
-from capmj.generate.config import Limits
-from capmj.generate.isolate import run_isolated
 from capmj.generate.static import static_checks
 from generator_script import CANDIDATES
-from hostile_candidates import BY_ID, CORPUS, NAME, Hostile
+from hostile_candidates import BY_ID, CORPUS, NAME, Hostile, run_hostile
 
 GOOD_FILES = ("good_zone_color.py", "good_block_in_bowl.py", "good_stack_in_zone.py")
 
@@ -111,43 +108,10 @@ RUNTIME_SAMPLE = ("registry-os-system", "in-generate", "raw-os-open-write", "rem
 """One module per door class (the full corpus runs in ``benchmarks/confinement.py``)."""
 
 
-def _leftover_processes(token: str) -> list[str]:
-    found = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-        except OSError:
-            continue
-        if token in cmd:
-            found.append(cmd)
-    return found
-
-
-def _run(hostile: Hostile, tmp: Path, **layers) -> tuple[object, list[str]]:
-    victim = tmp / "victim"
-    victim.write_text("keep me")
-    with socket.socket() as srv:
-        srv.bind(("127.0.0.1", 0))
-        srv.listen()
-        srv.setblocking(False)
-        path = tmp / "candidate.py"
-        path.write_text(hostile.module(tmp / "marker", victim, srv.getsockname()[1]))
-        run = run_isolated(path, name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
-                           limits=Limits(cpu_s=60, wall_s=120), **layers)
-        try:
-            srv.accept()
-            connected = ["a connection reached the listening socket"]
-        except BlockingIOError:
-            connected = []
-    traces = [p.name for p in tmp.iterdir() if p.name not in ("victim", "candidate.py")]
-    traces += [] if victim.exists() else ["the victim file was removed"]
-    return run, traces + connected + _leftover_processes(str(tmp))
-
-
 @pytest.mark.parametrize("hostile_id", RUNTIME_SAMPLE)
 def test_runtime_guard_alone_stops_the_door_and_records_the_event(hostile_id, tmp_path):
     hostile = BY_ID[hostile_id]
-    run, traces = _run(hostile, tmp_path, os_layer=False)
+    run, traces = run_hostile(hostile, tmp_path, os_layer=False)
     assert run.violation is not None, (hostile.id, run.ended, run.results)
     assert run.violation["event"].startswith(hostile.events), run.violation
     assert traces == [], traces
@@ -160,13 +124,13 @@ def test_runtime_guard_alone_stops_the_door_and_records_the_event(hostile_id, tm
 
 def test_runtime_guard_passes_the_good_candidate(tmp_path):
     good = Hostile("none", "none", "", "", ())
-    run, traces = _run(good, tmp_path)
+    run, traces = run_hostile(good, tmp_path)
     assert run.violation is None and run.ended == "completed" and traces == []
     assert all(r.passed for r in run.results), run.results
 
 
 def _os_layer_available(tmp_path: Path) -> dict:
-    run, _ = _run(Hostile("none", "none", "", "", ()), tmp_path, guarded=False)
+    run, _ = run_hostile(Hostile("none", "none", "", "", ()), tmp_path, guarded=False)
     return run.os_layer or {}
 
 
@@ -179,7 +143,7 @@ def test_os_layer_alone_keeps_files_and_network_untouched(hostile_id, tmp_path):
         pytest.skip(f"this machine does not allow the OS layer: {report}")
     work = tmp_path / "work"
     work.mkdir()
-    run, traces = _run(BY_ID[hostile_id], work, guarded=False)
+    run, traces = run_hostile(BY_ID[hostile_id], work, guarded=False)
     assert run.violation is None  # the guard was off: only the OS layer stood in the way
     assert traces == [], traces
 
