@@ -444,8 +444,10 @@ FIXTURE_SLOTS_LOCAL: tuple[tuple[float, float, float], ...] = (
     (0.0, 0.0, 0.0), (FIXTURE_SLOT, 0.0, 0.0), (0.0, FIXTURE_SLOT, 0.0))
 """The three slots in the fixture frame (spec task 10): along the long wall, then the short one."""
 FIXTURE_RADIUS = math.hypot(FIXTURE_LONG - FIXTURE_SLOT / 2 - FIXTURE_WALL, FIXTURE_SLOT / 2 + FIXTURE_WALL)
-"""Distance (m) from the fixture origin to its farthest point (the outer end of the long wall,
-local (0.07, −0.03)); larger than ``ObjectSpec.footprint_radius``, which assumes a centred box."""
+"""Distance (m) from the fixture origin bounding its farthest point (the outer end of the long wall,
+local (0.067, −0.033) with the walls ``FIXTURE_CLEARANCE`` out; the bound is that of walls
+touching the slots, kept so scenes stay as they were); larger than ``ObjectSpec.footprint_radius``,
+which assumes a centred box."""
 SLOT_TOL = 0.012
 """A block fills a slot when its centre is within this distance (m, 3-D) of the slot centre."""
 ROW_LINE_TOL = 0.015
@@ -564,20 +566,17 @@ def row_on_line(
                      tuple(float(g) for g in gaps), mid, tuple(reasons))
 
 
-def fixture_slots(origin: Vector, yaw: float, clearance: float = 0.0) -> np.ndarray:
+def fixture_slots(origin: Vector, yaw: float) -> np.ndarray:
     """(3, 3) world centres of a small block in each slot of an L-fixture whose origin (slot
     (0, 0), as ``get_obj_pos`` reports it) is ``origin`` and whose yaw is ``yaw``.
 
-    The slot z is the table (``origin`` z − FIXTURE_HEIGHT/2) plus half a block.  ``clearance``
-    shifts each centre away from the walls and from the other slots (slot (0,0) by (c, c), slot
-    (a,0) by (2c, c), slot (0,a) by (c, 2c)): a block lowered there does not scrape its
-    neighbours, and stays well within ``SLOT_TOL`` of the slot centre.
+    The slot z is the table (``origin`` z − FIXTURE_HEIGHT/2) plus half a block.  The walls keep
+    ``capmj.sim.objects.FIXTURE_CLEARANCE`` from these footprints, so a block lowered exactly
+    here does not scrape them.
     """
     o = np.asarray(origin, dtype=float)
-    shift = ((1, 1), (2, 1), (1, 2))
     z = float(o[2]) - FIXTURE_HEIGHT / 2 + FIXTURE_SLOT / 2
-    uv = [(u + clearance * du, v + clearance * dv) for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift)]
-    xy = from_frame_2d(uv, yaw, o[:2])
+    xy = from_frame_2d([(u, v) for u, v, _ in FIXTURE_SLOTS_LOCAL], yaw, o[:2])
     return np.column_stack([xy, np.full(len(xy), z)])
 
 
