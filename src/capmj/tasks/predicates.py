@@ -113,8 +113,10 @@ def zone_outside_distance(state: SceneState, obj_id: int, zone_id: int) -> float
 
 def in_zone(state: SceneState, obj_id: int, zone_id: int) -> bool:
     """Whether the xy centre of ``obj_id`` lies inside the zone square (side 0.12 m × scale,
-    honouring the zone's yaw).  Tolerance: none (a centre on the edge counts as inside); height is
-    not checked, so a block on top of a stack in the zone is in the zone."""
+    honouring the zone's yaw).  This is the one meaning of "in the zone" in every task, structures
+    included (the spec's rule; docs/task_plugins.md, "In the zone"): a block whose corner overhangs
+    the zone is in it when its centre is.  Tolerance: none (a centre on the edge counts as inside);
+    height is not checked, so a block on top of a stack in the zone is in the zone."""
     local = np.abs(zone_local_xy(state, zone_id, state.pos(obj_id)))
     h = zone_half_size(state.spec(zone_id))
     return bool(local[0] <= h + 1e-9 and local[1] <= h + 1e-9)
@@ -626,14 +628,6 @@ def footprint(state: SceneState, obj_id: int):
     return Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], pose.yaw, c[:2]))
 
 
-def footprint_outside_zone(state: SceneState, obj_id: int, zone_id: int) -> float:
-    """How far (m) the object's footprint reaches outside the zone square; 0 when inside."""
-    from shapely.geometry import Point
-
-    zone = footprint(state, zone_id)
-    return float(max(zone.distance(Point(p)) for p in footprint(state, obj_id).exterior.coords))
-
-
 def touching_pairs(state: SceneState, ids: Sequence[int], gap: float = TOUCH_GAP) -> list[tuple[int, int, float]]:
     """Pairs ``(a, b, distance)`` of the objects whose footprints are closer than ``gap`` (m)."""
     fps = {i: footprint(state, i) for i in ids}
@@ -726,5 +720,5 @@ def concentric(state: SceneState, ring_a: Sequence[int], ring_b: Sequence[int], 
 
 __all__ += [
     "CENTRE_TOL", "CIRCLE_TOL", "TOUCH_GAP", "alternates", "angular_order", "circle_of", "concentric", "footprint",
-    "footprint_outside_zone", "is_layer", "supporters", "touching_pairs",
+"is_layer", "supporters", "touching_pairs",
 ]
