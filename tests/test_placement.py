@@ -160,3 +160,27 @@ def test_get_bbox_of_a_turned_zone_and_of_a_bowl(api):
     assert (xmax - xmin) / spread == pytest.approx(0.12, abs=1e-4)  # the side, as the prompt says to recover it
     bxmin, bymin, _, bxmax, bymax, _ = f["get_bbox"](names[2])  # a bowl turned by 0.7 rad: its disc's box
     assert (bxmax - bxmin, bymax - bymin) == pytest.approx((2 * BOWL_RADIUS, 2 * BOWL_RADIUS), abs=1e-6)
+
+
+def test_reporter_in_zone_is_the_tasks_rule():
+    """The text reporter's pre-bound in_zone applies predicates.in_zone's rule (yaw and scale of the
+    zone honoured), not an axis-aligned 0.06 m box: one meaning of "in the zone"."""
+    from capmj.agents.reporter_env import reporter_env
+
+    objs = [ObjectSpec(1, "zone", "green", (0.5, 0.0, 0.0005), yaw=math.pi / 4),
+            ObjectSpec(2, "zone", "red", (0.5, 0.3, 0.0005), scale=2.0),
+            ObjectSpec(3, "block", "blue", (0.575, 0.0, 0.02), size="small"),  # along the turned zone's diagonal: in
+            ObjectSpec(4, "block", "yellow", (0.55, 0.05, 0.02), size="small"),  # in the axis box, out of the turned square
+            ObjectSpec(5, "block", "pink", (0.59, 0.39, 0.02), size="small")]  # in the 2x zone only
+    ctx = make_ctx(objs)
+    env = reporter_env(PlannerAPI(ctx).functions(), ctx.world.objects, "test")
+    state = ctx.world.state()
+    names = {o.obj_id: o.name for o in ctx.world.objects}
+    seen = []
+    for b in (3, 4, 5):
+        for z in (1, 2):
+            assert env["in_zone"](names[b], names[z]) == P.in_zone(state, b, z), (b, z)
+            seen.append(P.in_zone(state, b, z))
+    assert seen == [True, False, False, False, False, True]
+    with pytest.raises(ValueError, match="not a zone"):
+        env["in_zone"](names[3], names[4])

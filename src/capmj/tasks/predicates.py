@@ -111,15 +111,21 @@ def zone_outside_distance(state: SceneState, obj_id: int, zone_id: int) -> float
     return float(np.hypot(*excess))
 
 
+def in_square(xy: Vector, centre: Vector, yaw: float, half: float) -> bool:
+    """Whether the point ``xy`` lies inside the closed square of half side ``half`` (m) centred on
+    ``centre`` and turned by ``yaw`` (rad): the geometry of :func:`in_zone`, for callers that have
+    poses but no :class:`SceneState` (the text reporter's ``in_zone``)."""
+    local = np.abs(to_frame_2d(np.asarray(xy, float)[:2], yaw, np.asarray(centre, float)[:2]))
+    return bool(local[0] <= half + 1e-9 and local[1] <= half + 1e-9)
+
+
 def in_zone(state: SceneState, obj_id: int, zone_id: int) -> bool:
     """Whether the xy centre of ``obj_id`` lies inside the zone square (side 0.12 m × scale,
     honouring the zone's yaw).  This is the one meaning of "in the zone" in every task, structures
     included (the spec's rule; docs/task_plugins.md, "In the zone"): a block whose corner overhangs
     the zone is in it when its centre is.  Tolerance: none (a centre on the edge counts as inside);
     height is not checked, so a block on top of a stack in the zone is in the zone."""
-    local = np.abs(zone_local_xy(state, zone_id, state.pos(obj_id)))
-    h = zone_half_size(state.spec(zone_id))
-    return bool(local[0] <= h + 1e-9 and local[1] <= h + 1e-9)
+    return in_square(state.pos(obj_id), state.pos(zone_id), state.poses[zone_id].yaw, zone_half_size(state.spec(zone_id)))
 
 
 def objects_in_zone(state: SceneState, zone_id: int, kinds: Iterable[str] = ("block",)) -> list[int]:
@@ -425,7 +431,7 @@ __all__ = [
     "AREA_NAMES", "BOWL_TOL", "MOVE_TOL", "PLANE_TOL", "QUADRANTS", "STACK_AXIS_TOL", "TILT_TOL", "YAW_TOL",
     "Z_TOL", "WORKSPACE_X", "WORKSPACE_Y", "WORKSPACE_Z",
     "area_bounds", "bowl_floor_z", "bowl_rim_z", "build_tower", "find_stack_order", "fit_circle", "in_area",
-    "in_bowl", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
+    "in_bowl", "in_square", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
     "ravens_reward", "resting_on", "resting_on_table", "short_label", "toppled", "zone_half_size",
     "zone_local_xy", "zone_outside_distance",
 ]
