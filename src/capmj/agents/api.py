@@ -418,6 +418,28 @@ class PlanFunctions:
         x, y = denormalize_uv(arr[0], arr[1])
         return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
 
+    def denormalize_xy(self, pos, size=None):
+        """CapRavens' name for :meth:`denormalize`: normalised [u, v] → world [x, y] (a numpy array,
+        as there).  With ``size`` = (sx, sy) the result is an offset inside a box of that size
+        centred on the origin instead: [v sx − sx/2, u sy − sy/2] (the original's formula)."""
+        arr = np.asarray(pos, float)
+        if arr.ndim != 1 or len(arr) != 2:
+            raise ValueError(f"denormalize_xy expects [u, v], got {_summary(pos, 80)}")
+        if size is None:
+            return np.array(denormalize_uv(arr[0], arr[1]))
+        sx, sy = (float(v) for v in size[:2])
+        return np.array([arr[1] * sx - sx / 2, arr[0] * sy - sy / 2])
+
+    def denormalize_bbox(self, bbox):
+        """A normalised area (umin, vmin, umax, vmax) → the world area (xmin, ymin, xmax, ymax), as
+        ``get_random_free_pos(area=...)`` takes it (CapRavens' ``denormalize_bbox``)."""
+        if not _is_vector(bbox, (4,)):
+            raise ValueError(f"denormalize_bbox expects (umin, vmin, umax, vmax), got {_summary(bbox, 80)}")
+        umin, vmin, umax, vmax = (float(v) for v in bbox)
+        x0, y0 = denormalize_uv(umin, vmax)
+        x1, y1 = denormalize_uv(umax, vmin)
+        return [x0, y0, x1, y1]
+
     def get_corner_name(self, pos) -> str:
         """Name of the workspace corner nearest to a position ("top left corner", ...)."""
         p = self._api._xy(pos)
@@ -472,9 +494,11 @@ class PlanFunctions:
         """
         self._api._put(obj, target)
 
-    def stack_objects_in_order(self, names, targ=None) -> None:
-        """Stack ``names`` bottom (names[0]) to top; names[0] goes on ``targ`` when given,
-        otherwise it stays where it is.  Each next object goes on the previous one's top."""
+    def stack_objects_in_order(self, object_names, targ=None) -> None:
+        """Stack ``object_names`` bottom ([0]) to top; [0] goes on ``targ`` when given, otherwise
+        it stays where it is.  Each next object goes on the previous one's top.  (The parameter
+        keeps CapRavens' name, so ``stack_objects_in_order(object_names=...)`` runs as written.)"""
+        names = object_names
         if isinstance(names, (str, int)):
             names = [names]
         names = list(names)
@@ -500,6 +524,8 @@ API_FUNCTIONS: tuple[str, ...] = (
     "get_bbox",
     "get_obj_pos_dict",
     "denormalize",
+    "denormalize_xy",
+    "denormalize_bbox",
     "is_target_occupied",
     "get_random_free_pos",
     "put_first_on_second",
