@@ -9,7 +9,7 @@ from env_utils import get_obj_names, get_obj_pos, get_obj_rot, get_bbox, get_obj
 #   size(name) -> edge length of a block; upright(name) -> not tilted; in_zone(obj, zone), in_bowl(obj, bowl), on_top(upper, lower) -> bool
 # get_obj_pos(name) -> [x, y, z]. get_color(name) -> 'blue'.
 # Table: x from 0.25 (top) to 0.75 (bottom), y from -0.5 (left) to 0.5 (right), z up, table top z = 0. Blocks: tiny 0.02 m, small 0.04 m, big 0.06 m cubes.
-# In a zone: the centre's x and y lie within 0.06 of the zone centre (0.12 m square). In a bowl: the centre lies within 0.05 of the bowl centre in x-y.
+# In a zone: the centre lies inside the zone's square (0.12 m unless scaled, turned with the zone; in_zone checks it). In a bowl: the centre lies within 0.05 of the bowl centre in x-y.
 # A stack: centres within 0.02 of each other in x-y, the lowest on the table (or zone), each block resting on the one below
 # (z difference = mean of the two block sizes, +-0.015), none tilted.
 # Rules: no imports; only these names, np and math.

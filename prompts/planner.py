@@ -6,18 +6,20 @@ from plan_utils import parse_obj_name, parse_position
 # A UR5e robot with a suction cup picks and places objects on a table. Write the plan for the goal in the last comment.
 # API (metres, radians, quaternions (x, y, z, w)); names look like 'movable small blue block with obj_id 3', 'fixed red zone with obj_id 1':
 # get_obj_names() -> names of all objects; the list `objects` holds them too.
-# get_obj_pos(name) -> [x, y, z] of the object's centre. get_color(name) -> 'blue'. get_obj_rot(name) -> quaternion.
-# get_bbox(name) -> (xmin, ymin, zmin, xmax, ymax, zmax). get_obj_positions_np(names) -> (n, 3) array.
+# get_obj_pos(name) -> [x, y, z] of the object's centre (a fixture: the origin of its local frame, the centre of its slot (0, 0, 0)). get_color(name) -> 'blue'.
+# get_obj_rot(name) -> quaternion. Objects start at random yaws; yaw = 2 * math.atan2(q[2], q[3]).
+# get_bbox(name) -> (xmin, ymin, zmin, xmax, ymax, zmax), world axis-aligned: a square zone of side s turned by yaw t spans s * (abs(cos(t)) + abs(sin(t))). get_obj_positions_np(names) -> (n, 3) array.
 # is_target_occupied(name) -> names of objects overlapping that object (e.g. blocks in a zone); is_target_occupied([x, y], r) -> objects within r of the point.
 # get_random_free_pos(targ=None, area=(xmin, ymin, xmax, ymax)) -> a free [x, y, 0] in the area, away from every object and from targ.
-# put_first_on_second(name, target): pick the object, place it on target: a name (on its top; a zone: on whatever is already stacked in it; a bowl: inside), [x, y], [x, y, z] or ([x, y, z], quaternion).
+# put_first_on_second(name, target): pick the object, place it on target: a name (on its top, turned like the block or zone it goes on; a zone: on whatever is already stacked in it; a bowl: inside),
+#   [x, y] or [x, y, z] (resting on what is there, aligned with the world axes; z = height of the object's centre when let go, never below resting), or ([x, y(, z)], quaternion) (turned to its yaw).
 # stack_objects_in_order(names, targ=None): names[0] at the bottom (on targ if given), each next one on the previous one.
 # denormalize([u, v]) -> [x, y] for u = 0 (left) .. 1 (right), v = 0 (bottom) .. 1 (top). get_corner_name(pos), get_side_name(pos) -> 'top left corner', 'left side'.
 # say(message) logs a message.
 # parse_obj_name(description, f'objects = {get_obj_names()}') -> the names matching a description (another program answers it).
 # parse_position(description) -> a position [x, y(, z)] or a list of positions for a description.
 # Table: x from 0.25 (top/rear) to 0.75 (bottom/front), y from -0.5 (left) to 0.5 (right), z up, table top z = 0, robot base at (0, 0).
-# Halves: top x < 0.5, bottom x > 0.5, left y < 0, right y > 0. Blocks: tiny 0.02 m, small 0.04 m, big 0.06 m cubes. Zones: flat 0.12 m squares. Bowls: 0.12 m wide.
+# Halves: top x < 0.5, bottom x > 0.5, left y < 0, right y > 0. Blocks: tiny 0.02 m, small 0.04 m, big 0.06 m cubes. Zones: flat squares, 0.12 m unless scaled up. Bowls: 0.12 m wide.
 # Warm colours: red, yellow, orange, brown, pink, gold. Cool colours: blue, green, cyan, purple, gray, violet, indigo, silver.
 # Fixed objects (zones, bowls, balls, fixtures) cannot be picked; neither can an object with something on top of it.
 # Rules: no imports and no classes; only the functions above, np, math, itertools and shapely. Write the whole plan at once, with comments on your reasoning.

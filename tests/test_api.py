@@ -305,3 +305,20 @@ def test_plan_code_uses_the_api_in_the_sandbox(api_ctx):
     assert P.is_stack(state, order)[0] and all(P.in_zone(state, i, 1) for i in order)
     with pytest.raises(PlanError, match="line 1: ValueError: 'fixed blue bowl with obj_id 2' is fixed"):
         run_code("put_first_on_second('fixed blue bowl with obj_id 2', [0.5, 0.0])", env)
+
+
+def test_capravens_names_run_as_written(api_ctx):
+    """CapRavens' prompts call denormalize_xy, denormalize_bbox and stack_objects_in_order(object_names=...)."""
+    _, f, ctx = api_ctx
+    assert f["denormalize_xy"]([0.9, 0.9]).tolist() == pytest.approx(f["denormalize"]([0.9, 0.9]))
+    assert f["denormalize_xy"]([0.0, 1.0]).tolist() == pytest.approx([0.25, -0.5])  # top left
+    assert f["denormalize_xy"]([0.5, 1.0], size=(0.12, 0.2)).tolist() == pytest.approx([0.06, 0.0])
+    area = f["denormalize_bbox"]([0.5, 0.5, 1.0, 1.0])  # the top right quadrant of the image
+    assert area == pytest.approx([0.25, 0.0, 0.5, 0.5])
+    x, y, _ = f["get_random_free_pos"](area=area)
+    assert 0.25 <= x <= 0.5 and 0.0 <= y <= 0.5
+    red, purple = name_of(ctx, 3), name_of(ctx, 5)
+    f["stack_objects_in_order"](object_names=[red, purple], targ=[0.45, -0.1])
+    assert P.is_stack(ctx.world.state(), [3, 5])[0]
+    with pytest.raises(ValueError, match="denormalize_bbox expects"):
+        f["denormalize_bbox"]([0.0, 1.0])

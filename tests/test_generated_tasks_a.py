@@ -132,8 +132,10 @@ def test_pyramid_near_misses():
     rejected(t, scene, moved(state, {top: (0.0, 0.0, -0.04)}), "layer 3 has 0 block(s)", f"block {top} ")
     middle = goals[1].objects[0]  # a layer-2 block right above one lower block, not on four
     rejected(t, scene, moved(state, {middle: along(yaw, 0.025)}), f"block {middle} on layer 2 rests on")
-    out = moved(state, {i: along(yaw, 0.06) for g in goals for i in g.objects})  # edge blocks reach out
-    rejected(t, scene, out, "m outside the")
+    over = moved(state, {i: along(yaw, 0.06) for g in goals for i in g.objects})  # edge blocks overhang
+    assert t.evaluate(scene, over).success  # centres still in the zone: in it (one rule, predicates.in_zone)
+    out = moved(state, {i: along(yaw, 0.1) for g in goals for i in g.objects})  # edge centres out
+    rejected(t, scene, out, "m outside)")
 
 
 def test_cube_near_misses():
@@ -144,6 +146,10 @@ def test_cube_near_misses():
     wide = {i: along(yaw, 0.01 if k % 2 else -0.01) for k, i in enumerate(goals[0].objects)}  # pitch 0.065
     rejected(t, scene, moved(state, wide), "layer 1 is not a 2x2 grid", "pitch")
     rejected(t, scene, moved(state, {upper[0]: (0.0, 0.0, 0.03)}), "layer 2 has 3 block(s)")
+    # a cube whose corners overhang the zone by a few millimetres is in it: its centres are
+    everything = [i for g in goals for i in g.objects]
+    assert t.evaluate(scene, moved(state, {i: along(yaw, 0.02) for i in everything})).success
+    rejected(t, scene, moved(state, {i: along(yaw, 0.045) for i in everything}), "is not in the", "m outside)")
 
 
 def swap(state: SceneState, a: int, b: int) -> SceneState:

@@ -45,6 +45,12 @@ def test_code_constants_match_the_files():
     fixture = _geoms("fixture.xml")
     assert sorted(2 * max(g.size[:2]) for g in fixture.values()) == [O.FIXTURE_SHORT, O.FIXTURE_LONG]
     assert all(2 * g.size[2] == O.FIXTURE_HEIGHT and 2 * min(g.size[:2]) == O.FIXTURE_WALL for g in fixture.values())
+    # the walls' inner faces keep FIXTURE_CLEARANCE from the footprints of the slots (0,0), (a,0), (0,a)
+    long_wall, short_wall = fixture["g0"], fixture["g1"]
+    a = O.BLOCK_SIZES["small"]
+    assert long_wall.pos[1] + long_wall.size[1] == pytest.approx(-a / 2 - O.FIXTURE_CLEARANCE)
+    assert short_wall.pos[0] + short_wall.size[0] == pytest.approx(-a / 2 - O.FIXTURE_CLEARANCE)
+    assert long_wall.pos[0] + long_wall.size[0] >= 1.5 * a and short_wall.pos[1] + short_wall.size[1] >= a / 2
     assert _geoms("ball.xml")["g0"].size[0] == O.BALL_RADIUS
     assert 2 * _geoms("block.xml")["g0"].size[0] == O.BLOCK_SIZES["small"]
     zone = _geoms("zone.xml")["g0"]

@@ -4,14 +4,12 @@
 # The fixture's reported pose is its local frame.  Sorting the blocks by colour and dealing them
 # round robin gives every fixture three different colours (no colour has more blocks than there
 # are fixtures).  Slot (0,0,0) of every fixture is filled first, then (a,0,0), then (0,a,0); each
-# block goes down 2 mm clear of the walls and of its neighbour so it does not scrape them, turned
-# like the fixture.
-CLEAR = 0.002
+# block goes down exactly at its slot, turned like the fixture.
 fixtures = [name for name in objects if ' fixture ' in name]
 blocks = sorted([name for name in objects if ' block ' in name], key=lambda b: get_color(b))
 bbox = get_bbox(blocks[0])
 a = bbox[5] - bbox[2]  # the block height is its edge length
-seats = [(CLEAR, CLEAR), (a + 2 * CLEAR, CLEAR), (CLEAR, a + 2 * CLEAR)]
+seats = [(0.0, 0.0), (a, 0.0), (0.0, a)]
 n = len(fixtures)
 for slot in range(3):
     for f, fixture in enumerate(fixtures):

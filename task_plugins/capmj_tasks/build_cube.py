@@ -30,8 +30,8 @@ class BuildCube(BenchTask):
 
     Success Conditions:
         Two layers of 4 blocks, each a 2 × 2 grid (``predicates.is_layer``: neighbour pitch
-        0.04–0.05 m, aligned within 0.015 m): the lower upright on the table with every footprint
-        inside the zone square, the upper at one block height (± 0.015 m) with each block resting
+        0.04–0.05 m, aligned within 0.015 m), every centre in the zone (``predicates.in_zone``):
+        the lower upright on the table, the upper at one block height (± 0.015 m) with each block resting
         on exactly one lower block and within 0.015 m of it in xy.  Progress: blocks per layer,
         the grid checks and every block's placement, as a share of all of them.
     """

@@ -33,10 +33,10 @@ class BuildRectangularPyramid(BenchTask):
     Success Conditions:
         Layer 1: 9 blocks upright on the table with centres in the zone forming a 3 × 3 grid
         (``predicates.is_layer``: neighbour pitch 0.04–0.06 m, rows and columns aligned within
-        0.015 m), each footprint inside the zone square.  Layer 2: 4 blocks at one block height
+        0.015 m).  Layer 2: 4 blocks at one block height
         (± 0.015 m) forming a 2 × 2 grid, each resting on four layer-1 blocks
         (``predicates.supporters``: z gap ± 0.015 m, footprints overlapping).  Layer 3: one block
-        resting on the four of layer 2.  Progress: blocks per layer, the grid checks and every
+        resting on the four of layer 2.  Every centre in the zone (``predicates.in_zone``).  Progress: blocks per layer, the grid checks and every
         block's support, as a share of all of them.
     """
 

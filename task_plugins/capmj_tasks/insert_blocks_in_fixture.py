@@ -13,10 +13,6 @@ from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
 from capmj.tasks.spawn import DEFAULT_COLORS, Spawner, pick_color, pick_colors
 from capmj_tasks.common import GENERATED, BenchTask, label, shuffled, verdict
 
-SLOT_CLEARANCE = 0.002
-"""The oracle lowers each block 2 mm clear of the walls and of the neighbouring slot
-(``predicates.fixture_slots``): with no clearance a block scrapes its neighbour on the way down,
-stops on it and lands beside the slot."""
 SLOT_NAMES = ("(0,0,0)", "(a,0,0)", "(0,a,0)")
 
 GOAL = ("Each L-shaped fixture can hold three blocks, suppose the block size is (a,a,a), then in fixture's local "
@@ -89,13 +85,13 @@ class InsertBlocksInFixture(BenchTask):
 
     def oracle_goals(self, scene: Scene) -> list[OracleGoal]:
         """Slot (0,0,0) of every fixture first, then (a,0,0), then (0,a,0), with the blocks of
-        ``info["fill"]``, lowered ``SLOT_CLEARANCE`` clear of walls and neighbours at the fixture
-        yaw."""
+        ``info["fill"]``, at the stated slots turned like the fixture (its walls keep
+        ``FIXTURE_CLEARANCE`` from the slots, so exact targets land)."""
         goals = []
         for s in range(3):
             for fid, fill in zip(scene.info["fixtures"], scene.info["fill"]):
                 f = scene.by_id(fid)
-                x, y, z = P.fixture_slots(f.pos, f.yaw, SLOT_CLEARANCE)[s]
+                x, y, z = P.fixture_slots(f.pos, f.yaw)[s]
                 goals.append(OracleGoal((fill[s],), (Target((float(x), float(y), float(z)), f.yaw),), ((1,),),
                                         rotations=True, metric="pose", tolerance=P.PLANE_TOL))
         return goals

@@ -37,7 +37,7 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 import numpy as np
 
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, TILTED, Footprints
+from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, ROUND_KINDS, TILTED, Footprints
 from capmj.errors import MotionFailed, UnknownObjectError, describe
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
@@ -304,6 +304,9 @@ class PlannerAPI:
         else:
             if isinstance(target, (list, tuple)) and len(target) == 1:
                 target = target[0]  # the original API's one-element position lists
+            # A bare position is the pose (position, identity), as in CapRavens: the object ends
+            # aligned with the world axes, so grids of bare positions do not overlap.
+            yaw = 0.0
             if _is_pose(target):
                 yaw = quat_yaw(wxyz(target[1]))
                 target = target[0]
@@ -348,22 +351,40 @@ class PlanFunctions:
         return self._api._names()
 
     def get_obj_pos(self, obj):
-        """[x, y, z] (m) of an object's geometric centre; a list of names gives a list."""
+        """[x, y, z] (m) of an object's centre; a list of names gives a list.
+
+        The centre is the origin of the object's own frame: a block's or ball's geometric centre;
+        a zone's centre (z = half its 1 mm thickness); a bowl's axis at mid-height of its wall; a
+        fixture's local-frame origin, the centre of its slot (0, 0, 0) at the height of a small
+        block's centre standing there (not the middle of its L), so slot (u, v) is this point
+        plus (u, v) turned by the fixture's yaw.
+        """
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_pos(o) for o in obj]
         return [float(v) for v in self._api._pos(self._api._resolve(obj).obj_id)]
 
     def get_obj_rot(self, obj):
-        """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list."""
+        """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list.
+
+        Objects start at random yaws (about z); an upright object's yaw is 2 atan2(z, w)."""
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_rot(o) for o in obj]
         return self._api._xquat(self._api._resolve(obj).obj_id)
 
     def get_bbox(self, obj):
-        """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out."""
+        """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out.
+
+        The box around the object as it is turned now: a square zone of side s turned by yaw θ
+        spans s (|cos θ| + |sin θ|) in x and in y, more than s; its side is the box width divided
+        by that factor (yaw from :meth:`get_obj_rot`).  Round objects (bowls, balls) give the box
+        of their disc whatever their yaw."""
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_bbox(o) for o in obj]
-        lo, hi = self._api._world.aabb(self._api._resolve(obj).obj_id)
+        o = self._api._resolve(obj)
+        lo, hi = self._api._world.aabb(o.obj_id)
+        if o.kind in ROUND_KINDS:  # the geoms' boxes turn with the yaw, the disc does not
+            c, r = self._api._pos(o.obj_id), o.half_extents[0]
+            lo[:2], hi[:2] = c[:2] - r, c[:2] + r
         return tuple(float(v) for v in (*lo, *hi))
 
     def get_obj_pos_dict(self) -> dict[str, tuple[list[float], list[float]]]:
@@ -397,6 +418,28 @@ class PlanFunctions:
             raise ValueError(f"denormalize expects [u, v] or [u, v, z], got {_summary(pos, 80)}")
         x, y = denormalize_uv(arr[0], arr[1])
         return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
+
+    def denormalize_xy(self, pos, size=None):
+        """CapRavens' name for :meth:`denormalize`: normalised [u, v] → world [x, y] (a numpy array,
+        as there).  With ``size`` = (sx, sy) the result is an offset inside a box of that size
+        centred on the origin instead: [v sx − sx/2, u sy − sy/2] (the original's formula)."""
+        arr = np.asarray(pos, float)
+        if arr.ndim != 1 or len(arr) != 2:
+            raise ValueError(f"denormalize_xy expects [u, v], got {_summary(pos, 80)}")
+        if size is None:
+            return np.array(denormalize_uv(arr[0], arr[1]))
+        sx, sy = (float(v) for v in size[:2])
+        return np.array([arr[1] * sx - sx / 2, arr[0] * sy - sy / 2])
+
+    def denormalize_bbox(self, bbox):
+        """A normalised area (umin, vmin, umax, vmax) → the world area (xmin, ymin, xmax, ymax), as
+        ``get_random_free_pos(area=...)`` takes it (CapRavens' ``denormalize_bbox``)."""
+        if not _is_vector(bbox, (4,)):
+            raise ValueError(f"denormalize_bbox expects (umin, vmin, umax, vmax), got {_summary(bbox, 80)}")
+        umin, vmin, umax, vmax = (float(v) for v in bbox)
+        x0, y0 = denormalize_uv(umin, vmax)
+        x1, y1 = denormalize_uv(umax, vmin)
+        return [x0, y0, x1, y1]
 
     def get_corner_name(self, pos) -> str:
         """Name of the workspace corner nearest to a position ("top left corner", ...)."""
@@ -434,17 +477,29 @@ class PlanFunctions:
     def put_first_on_second(self, obj, target) -> None:
         """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
 
-        ``target``: a name → on that object's real top (a zone: at its centre on the table or
-        on what is stacked there; a bowl: inside, on its floor); [x, y] → at that point, resting
-        on whatever is there; [x, y, z] → centre at z, or resting on what is there when that
-        is higher; (position, quaternion xyzw) → also turned to the quaternion's yaw.
+        Objects start at random yaws; where the object goes and the yaw it ends with follow
+        from the form of ``target``:
+
+        * a name → on that object's real top (a zone: at its centre, on the table or on what is
+          stacked there; a bowl: inside, on its floor), turned like the block or zone it goes
+          on; in a bowl, on a ball or a fixture it keeps its yaw;
+        * [x, y] → centred at that point, resting on whatever is there, aligned with the world
+          axes (yaw 0: the pose ([x, y, z], (0, 0, 0, 1)), as in CapRavens);
+        * [x, y, z] → the same, with z the height of the object's centre where it is let go: the
+          arm lowers it to z, or until it touches something first, and releases it; a z below
+          the resting height there counts as that height, a z above it drops the object;
+        * ([x, y] or [x, y, z], quaternion xyzw) → as above, turned to the quaternion's yaw.
+
+        Blocks are symmetric every 90°, so a block turns by at most 45°.
         Raises ValueError for bad arguments and RuntimeError when the robot fails.
         """
         self._api._put(obj, target)
 
-    def stack_objects_in_order(self, names, targ=None) -> None:
-        """Stack ``names`` bottom (names[0]) to top; names[0] goes on ``targ`` when given,
-        otherwise it stays where it is.  Each next object goes on the previous one's top."""
+    def stack_objects_in_order(self, object_names, targ=None) -> None:
+        """Stack ``object_names`` bottom ([0]) to top; [0] goes on ``targ`` when given, otherwise
+        it stays where it is.  Each next object goes on the previous one's top.  (The parameter
+        keeps CapRavens' name, so ``stack_objects_in_order(object_names=...)`` runs as written.)"""
+        names = object_names
         if isinstance(names, (str, int)):
             names = [names]
         names = list(names)
@@ -470,6 +525,8 @@ API_FUNCTIONS: tuple[str, ...] = (
     "get_bbox",
     "get_obj_pos_dict",
     "denormalize",
+    "denormalize_xy",
+    "denormalize_bbox",
     "is_target_occupied",
     "get_random_free_pos",
     "put_first_on_second",

@@ -44,10 +44,10 @@ _STAR_MODULES = frozenset({"shapely.geometry", "shapely.affinity", "env_utils", 
 RESERVED: dict[str, str] = {
     "put_first_on_second": "it moves the robot, and only the plan may move the robot",
     "stack_objects_in_order": "it moves the robot, and only the plan may move the robot",
-    "parse_obj_name": "it is a helper LMP that only the plan may call: "
-                      "parse_obj_name(description, context=None) returns object names",
-    "parse_position": "it is a helper LMP that only the plan may call: "
-                      "parse_position(description, context=None) returns a position or pose",
+    "parse_obj_name": "it is a helper LMP that the plan and helper code up to LMPSession.max_helper_depth "
+                      "levels deep may call: parse_obj_name(description, context=None) returns object names",
+    "parse_position": "it is a helper LMP that the plan and helper code up to LMPSession.max_helper_depth "
+                      "levels deep may call: parse_position(description, context=None) returns a position or pose",
     "parse_function": "it writes missing functions before code runs; code does not call it",
     "parse_completion": "it is the reporter's checker, run by the benchmark after the plan",
     "tabletop_ui": "it is the planner itself; write the plan's statements directly",

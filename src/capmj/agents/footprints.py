@@ -36,6 +36,8 @@ FREE_GRID_STEP = 0.005
 FREE_CLEARANCE = 0.045
 """Default clearance (m) from a free position to every footprint: a big block (0.06 m, half
 diagonal 0.042 m) fits there at any yaw."""
+ROUND_KINDS = frozenset({"bowl", "ball"})
+"""Kinds whose footprint is a disc whatever their yaw (their geoms' boxes turn with it)."""
 TILTED = math.radians(20.0)
 """Tilt beyond which an object's footprint is its world xy box (its geoms no longer lie flat)."""
 
@@ -131,7 +133,7 @@ class Footprints:
     def parts(self, o: ObjectSpec) -> list[Part]:
         """Footprint parts of an object now: discs (bowls, balls, round geoms) and rectangles."""
         pose = self._pose(o.obj_id)
-        if o.kind in ("bowl", "ball"):
+        if o.kind in ROUND_KINDS:
             r = BOWL_RADIUS if o.kind == "bowl" else BALL_RADIUS
             return [Disc(pose.pos[0], pose.pos[1], r)]
         if pose.tilt > TILTED:
@@ -272,4 +274,5 @@ class Footprints:
         return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
 
 
-__all__ = ["Disc", "FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "Rect", "REACH_RADIUS", "TILTED", "distances"]
+__all__ = ["Disc", "FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "Rect", "REACH_RADIUS", "ROUND_KINDS", "TILTED",
+           "distances"]

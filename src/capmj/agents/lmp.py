@@ -127,9 +127,15 @@ class LMPSession:
     directory: Path | None = None
     lmp_budget: SandboxBudget = field(default_factory=lambda: SandboxBudget(wall_s=20.0))
     max_fn_depth: int = 3
+    max_helper_depth: int = 2
+    """How deep helper LMPs nest: the plan's parse_obj_name / parse_position (depth 1) may call
+    them again (depth 2), as CapRavens' helper examples do (parse_position asks parse_obj_name for
+    the objects it measures); deeper code gets an error naming the limit, so two helpers asking
+    each other cannot loop."""
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
     _counters: dict[str, int] = field(default_factory=dict)
     _system: str | None = None
+    _helper_depth: int = 0
 
     # -- plumbing --------------------------------------------------------------------------
     @property
@@ -179,9 +185,13 @@ class LMPSession:
         return [{"role": "system", "content": self.system_prompt}, {"role": "user", "content": user}]
 
     def helper_env(self, question: str | None = None) -> dict[str, Any]:
-        """What helper LMP code may use: the read-only API (nothing that moves the robot), and
+        """What helper LMP code may use: the read-only API (nothing that moves the robot), the
+        helper LMPs themselves while the nesting is below :attr:`max_helper_depth`, and
         ``objects`` from the question's ``objects = [...]`` line when there is one."""
         env: dict[str, Any] = {k: v for k, v in self.api.items() if k not in ACTION_FUNCTIONS}
+        if self._helper_depth < self.max_helper_depth:
+            env["parse_obj_name"] = self.parse_obj_name
+            env["parse_position"] = self.parse_position
         if question is not None:
             names = object_names(question)
             if names is not None:
@@ -282,7 +292,11 @@ class LMPSession:
     def run_lmp(self, lmp: str, question: str, return_var: str, *, query: str | None = None) -> Any:
         """Generic helper LMP: the value of ``return_var`` after running the LMP's code."""
         call = self.next_call(lmp, query if query is not None else question)
-        ns = self._ask_and_run(call, lmp, question)
+        self._helper_depth += 1
+        try:
+            ns = self._ask_and_run(call, lmp, question)
+        finally:
+            self._helper_depth -= 1
         if return_var not in ns:
             exc = PlanError(f"NameError: {lmp} code did not set '{return_var}'")
             self.record(call, "error", describe(exc))

@@ -14,7 +14,8 @@ once from the settled scene it judges:
                    also bound as a variable ``orange_zone = 'fixed orange zone with obj_id 1'``
 ``size(name)``     a block's edge length (0.0 for other objects)
 ``upright(name)``  roll and pitch within 0.26 rad of a multiple of pi/2
-``in_zone(obj, zone)``  centre within 0.06 m of the zone centre in x and y
+``in_zone(obj, zone)``  centre inside the zone's square, turned with the zone and of its size
+                   (:func:`capmj.tasks.predicates.in_square`: the tasks' one rule)
 ``in_bowl(obj, bowl)``  centre within 0.05 m of the bowl centre in x-y
 ``on_top(upper, lower)``  centres within 0.02 m in x-y and resting: z difference = mean of the two
                    sizes +- 0.015 m
@@ -31,6 +32,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from capmj.sim.objects import BLOCK_SIZES
+from capmj.tasks.predicates import in_square
 
 __all__ = ["PREBOUND", "goal_objects", "reporter_env"]
 
@@ -39,7 +41,6 @@ PREBOUND = ("poses", "sizes", "blocks", "zones", "bowls", "goal_objects", "size"
 """Names the reporter's code may use without defining them (listed in the repair request), besides
 the ``<colour>_<kind>`` variables of the goal's named objects."""
 
-ZONE_HALF = 0.06
 BOWL_RADIUS = 0.05
 STACK_XY = 0.02
 STACK_Z = 0.015
@@ -65,6 +66,7 @@ def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], 
     poses: dict[str, tuple[list[float], list[float]]] = api["get_obj_pos_dict"]()
     kinds = {o.name: o.kind for o in objects}
     sizes = {o.name: BLOCK_SIZES[o.size or "small"] for o in objects if o.kind == "block"}
+    zone_half = {o.name: o.half_extents[0] for o in objects if o.kind == "zone"}
 
     def _pos(name: str) -> list[float]:
         if name not in poses:
@@ -83,9 +85,11 @@ def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], 
         return all(min(abs(a) % quarter, quarter - abs(a) % quarter) < TILT for a in poses[name][1][:2])
 
     def in_zone(obj: str, zone: str) -> bool:
-        """True when ``obj``'s centre lies within 0.06 m of ``zone``'s centre in x and in y."""
-        (x, y, _), (zx, zy, _) = _pos(obj), _pos(zone)
-        return abs(x - zx) < ZONE_HALF and abs(y - zy) < ZONE_HALF
+        """True when ``obj``'s centre lies inside ``zone``'s square (its yaw and size honoured)."""
+        centre = _pos(zone)
+        if zone not in zone_half:
+            raise ValueError(f"{zone!r} is not a zone; zones: {list(zone_half)}")
+        return in_square(_pos(obj), centre, poses[zone][1][2], zone_half[zone])
 
     def in_bowl(obj: str, bowl: str) -> bool:
         """True when ``obj``'s centre lies within 0.05 m of ``bowl``'s centre in x-y."""

@@ -111,13 +111,21 @@ def zone_outside_distance(state: SceneState, obj_id: int, zone_id: int) -> float
     return float(np.hypot(*excess))
 
 
+def in_square(xy: Vector, centre: Vector, yaw: float, half: float) -> bool:
+    """Whether the point ``xy`` lies inside the closed square of half side ``half`` (m) centred on
+    ``centre`` and turned by ``yaw`` (rad): the geometry of :func:`in_zone`, for callers that have
+    poses but no :class:`SceneState` (the text reporter's ``in_zone``)."""
+    local = np.abs(to_frame_2d(np.asarray(xy, float)[:2], yaw, np.asarray(centre, float)[:2]))
+    return bool(local[0] <= half + 1e-9 and local[1] <= half + 1e-9)
+
+
 def in_zone(state: SceneState, obj_id: int, zone_id: int) -> bool:
     """Whether the xy centre of ``obj_id`` lies inside the zone square (side 0.12 m × scale,
-    honouring the zone's yaw).  Tolerance: none (a centre on the edge counts as inside); height is
-    not checked, so a block on top of a stack in the zone is in the zone."""
-    local = np.abs(zone_local_xy(state, zone_id, state.pos(obj_id)))
-    h = zone_half_size(state.spec(zone_id))
-    return bool(local[0] <= h + 1e-9 and local[1] <= h + 1e-9)
+    honouring the zone's yaw).  This is the one meaning of "in the zone" in every task, structures
+    included (the spec's rule; docs/task_plugins.md, "In the zone"): a block whose corner overhangs
+    the zone is in it when its centre is.  Tolerance: none (a centre on the edge counts as inside);
+    height is not checked, so a block on top of a stack in the zone is in the zone."""
+    return in_square(state.pos(obj_id), state.pos(zone_id), state.poses[zone_id].yaw, zone_half_size(state.spec(zone_id)))
 
 
 def objects_in_zone(state: SceneState, zone_id: int, kinds: Iterable[str] = ("block",)) -> list[int]:
@@ -423,7 +431,7 @@ __all__ = [
     "AREA_NAMES", "BOWL_TOL", "MOVE_TOL", "PLANE_TOL", "QUADRANTS", "STACK_AXIS_TOL", "TILT_TOL", "YAW_TOL",
     "Z_TOL", "WORKSPACE_X", "WORKSPACE_Y", "WORKSPACE_Z",
     "area_bounds", "bowl_floor_z", "bowl_rim_z", "build_tower", "find_stack_order", "fit_circle", "in_area",
-    "in_bowl", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
+    "in_bowl", "in_square", "in_zone", "is_grid", "is_stack", "max_matching", "moved_less_than", "objects_in_zone", "positions",
     "ravens_reward", "resting_on", "resting_on_table", "short_label", "toppled", "zone_half_size",
     "zone_local_xy", "zone_outside_distance",
 ]
@@ -444,8 +452,10 @@ FIXTURE_SLOTS_LOCAL: tuple[tuple[float, float, float], ...] = (
     (0.0, 0.0, 0.0), (FIXTURE_SLOT, 0.0, 0.0), (0.0, FIXTURE_SLOT, 0.0))
 """The three slots in the fixture frame (spec task 10): along the long wall, then the short one."""
 FIXTURE_RADIUS = math.hypot(FIXTURE_LONG - FIXTURE_SLOT / 2 - FIXTURE_WALL, FIXTURE_SLOT / 2 + FIXTURE_WALL)
-"""Distance (m) from the fixture origin to its farthest point (the outer end of the long wall,
-local (0.07, −0.03)); larger than ``ObjectSpec.footprint_radius``, which assumes a centred box."""
+"""Distance (m) from the fixture origin bounding its farthest point (the outer end of the long wall,
+local (0.067, −0.033) with the walls ``FIXTURE_CLEARANCE`` out; the bound is that of walls
+touching the slots, kept so scenes stay as they were); larger than ``ObjectSpec.footprint_radius``,
+which assumes a centred box."""
 SLOT_TOL = 0.012
 """A block fills a slot when its centre is within this distance (m, 3-D) of the slot centre."""
 ROW_LINE_TOL = 0.015
@@ -564,20 +574,17 @@ def row_on_line(
                      tuple(float(g) for g in gaps), mid, tuple(reasons))
 
 
-def fixture_slots(origin: Vector, yaw: float, clearance: float = 0.0) -> np.ndarray:
+def fixture_slots(origin: Vector, yaw: float) -> np.ndarray:
     """(3, 3) world centres of a small block in each slot of an L-fixture whose origin (slot
     (0, 0), as ``get_obj_pos`` reports it) is ``origin`` and whose yaw is ``yaw``.
 
-    The slot z is the table (``origin`` z − FIXTURE_HEIGHT/2) plus half a block.  ``clearance``
-    shifts each centre away from the walls and from the other slots (slot (0,0) by (c, c), slot
-    (a,0) by (2c, c), slot (0,a) by (c, 2c)): a block lowered there does not scrape its
-    neighbours, and stays well within ``SLOT_TOL`` of the slot centre.
+    The slot z is the table (``origin`` z − FIXTURE_HEIGHT/2) plus half a block.  The walls keep
+    ``capmj.sim.objects.FIXTURE_CLEARANCE`` from these footprints, so a block lowered exactly
+    here does not scrape them.
     """
     o = np.asarray(origin, dtype=float)
-    shift = ((1, 1), (2, 1), (1, 2))
     z = float(o[2]) - FIXTURE_HEIGHT / 2 + FIXTURE_SLOT / 2
-    uv = [(u + clearance * du, v + clearance * dv) for (u, v, _), (du, dv) in zip(FIXTURE_SLOTS_LOCAL, shift)]
-    xy = from_frame_2d(uv, yaw, o[:2])
+    xy = from_frame_2d([(u, v) for u, v, _ in FIXTURE_SLOTS_LOCAL], yaw, o[:2])
     return np.column_stack([xy, np.full(len(xy), z)])
 
 
@@ -625,14 +632,6 @@ def footprint(state: SceneState, obj_id: int):
         ext = np.abs(pose.rotation) @ np.array([hx, hy, hz])
         return box(c[0] - ext[0], c[1] - ext[1], c[0] + ext[0], c[1] + ext[1])
     return Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], pose.yaw, c[:2]))
-
-
-def footprint_outside_zone(state: SceneState, obj_id: int, zone_id: int) -> float:
-    """How far (m) the object's footprint reaches outside the zone square; 0 when inside."""
-    from shapely.geometry import Point
-
-    zone = footprint(state, zone_id)
-    return float(max(zone.distance(Point(p)) for p in footprint(state, obj_id).exterior.coords))
 
 
 def touching_pairs(state: SceneState, ids: Sequence[int], gap: float = TOUCH_GAP) -> list[tuple[int, int, float]]:
@@ -727,5 +726,5 @@ def concentric(state: SceneState, ring_a: Sequence[int], ring_b: Sequence[int], 
 
 __all__ += [
     "CENTRE_TOL", "CIRCLE_TOL", "TOUCH_GAP", "alternates", "angular_order", "circle_of", "concentric", "footprint",
-    "footprint_outside_zone", "is_layer", "supporters", "touching_pairs",
+"is_layer", "supporters", "touching_pairs",
 ]
