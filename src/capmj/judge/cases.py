@@ -112,6 +112,11 @@ class Stage:
     def realise(self, layout: Mapping[int, Pose]) -> SceneState:
         """Place ``layout`` on the initial world at rest, settle, return the state."""
         self.restart()
+        return self.place(layout)
+
+    def place(self, layout: Mapping[int, Pose]) -> SceneState:
+        """Place ``layout`` on the world as it is now (after :meth:`restart`: the initial world,
+        e.g. once a VLM reporter has taken its "before" image), settle, return the state."""
         self.world.place_objects(layout)
         self.world.settle(max_steps=JUDGE_SETTLE_STEPS)
         return self.world.state()
