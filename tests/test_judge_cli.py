@@ -125,3 +125,21 @@ def test_metrics_by_hand() -> None:
     assert m["balanced_accuracy"] == pytest.approx(0.7) and m["verdict_rate"] == 0.9
     lo, hi = m["accuracy_ci"]
     assert lo == pytest.approx(0.3968, abs=1e-4) and hi == pytest.approx(0.8922, abs=1e-4)
+
+
+def test_report_compares_two_scripted_reporters_on_the_same_states_with_mcnemar(
+        server: StubLLMServer, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    kinds = ["--kinds", "oracle,displaced,unstacked,toppled,swapped,wrong_bowl"]
+    for name, answer in (("yes", "judge = True"), ("no", "judge = False")):
+        server.respond_with(lambda request, a=answer: code(a))
+        out = tmp_path / name
+        assert main(["judge", "--tasks", TASKS, "--seeds", SEEDS, "--out", str(out), "--no-progress",
+                     *llm_flags(server), *kinds]) == 0
+    assert main(["judge", "report", str(tmp_path / "yes"), str(tmp_path / "no"), "--out", str(tmp_path / "cmp")]) == 0
+    result = json.loads((tmp_path / "cmp" / "comparison.json").read_text())
+    o = result["overall"]
+    # 2 positives (the oracle states: only "yes" is right) and 6 negatives (only "no" is right)
+    assert (o["n"], o["only_a"], o["only_b"], result["unpaired"], result["same_set"]) == (8, 2, 6, 0, True)
+    assert o["p_value"] == pytest.approx(2 * (1 + 8 + 28) / 2 ** 8)  # 2 * P[Binomial(8, 1/2) <= 2]
+    assert "| **overall** | 8 | 2 | 6 | 2 | 6 | 0.289 (n.s.) |" in capsys.readouterr().out
+    assert main(["judge", "report", str(tmp_path / "yes"), str(tmp_path / "missing")]) == 2

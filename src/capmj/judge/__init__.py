@@ -13,6 +13,7 @@ just outside a tolerance, each checked by the task's own predicate after settlin
 | :mod:`capmj.judge.judgeset` | building the labelled set for tasks × seeds |
 | :mod:`capmj.judge.metrics` | accuracy, balanced accuracy, precision, recall, Wilson intervals |
 | :mod:`capmj.judge.evaluate` | running a reporter (text, vlm, predicate) over the set |
+| :mod:`capmj.judge.compare` | ``judge report A B``: two reporters on the same states (McNemar) |
 | :mod:`capmj.judge.cli` | ``python -m capmj.bench judge`` |
 
 It sits beside :mod:`capmj.bench` (it uses agents, tasks and sim, and bench only to share the

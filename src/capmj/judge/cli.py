@@ -6,7 +6,8 @@ state, keys :data:`capmj.judge.metrics.RECORD_FIELDS`), ``transcripts.jsonl`` (e
 state), ``summary.json`` (``overall``, ``tasks.<task>``, ``kinds.<kind>``: ``n``, ``positives``,
 ``negatives``, ``accuracy``, ``balanced_accuracy``, ``precision``, ``recall``, ``verdict_rate``, ...;
 see :mod:`capmj.judge.metrics`), ``summary.md`` and ``config.json``.  Exit codes as the bench's:
-0 done, 2 bad input, 3 stopped by --max-tokens / --max-cost-usd.
+0 done, 2 bad input, 3 stopped by --max-tokens / --max-cost-usd.  ``judge report A B`` compares two
+runs (:mod:`capmj.judge.compare`).
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples:\n"
                "  python -m capmj.bench judge --reporter predicate --out runs/judge-ref      # the ceiling\n"
                "  python -m capmj.bench judge --reporter text --model openai/qwen2.5-coder-1.5b \\\n"
-               "      --api-base http://127.0.0.1:8080/v1 --llm-cache /tmp/llm/cache --out runs/judge-qwen",
+               "      --api-base http://127.0.0.1:8080/v1 --llm-cache /tmp/llm/cache --out runs/judge-qwen\n"
+               "  python -m capmj.bench judge report runs/judge-a runs/judge-b   # paired McNemar test",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--tasks", default=DEFAULT_TASKS, metavar="SEL",
                    help=f"task names or tags, comma-separated (default: {DEFAULT_TASKS})")
@@ -196,6 +198,10 @@ def _judge_all(judge: Any, cases: list[Any], args: argparse.Namespace
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == "report":
+        from capmj.judge.compare import main as compare_main
+
+        return compare_main(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         return run(args, argv)
