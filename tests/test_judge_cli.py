@@ -143,3 +143,18 @@ def test_report_compares_two_scripted_reporters_on_the_same_states_with_mcnemar(
     assert o["p_value"] == pytest.approx(2 * (1 + 8 + 28) / 2 ** 8)  # 2 * P[Binomial(8, 1/2) <= 2]
     assert "| **overall** | 8 | 2 | 6 | 2 | 6 | 0.289 (n.s.) |" in capsys.readouterr().out
     assert main(["judge", "report", str(tmp_path / "yes"), str(tmp_path / "missing")]) == 2
+
+
+def test_log_writes_one_rrd_per_judged_state_with_the_transcript_and_the_label(
+        server: StubLLMServer, tmp_path: Path) -> None:
+    from capmj.replay import read_episode
+
+    server.respond_with(lambda request: code("judge = True\nreason = 'scripted'"))
+    out = tmp_path / "out"
+    assert main(["judge", "--tasks", "stack-blocks-with-alternate-color", "--seeds", SEEDS, "--out", str(out),
+                 "--no-progress", "--kinds", "oracle,swapped", "--log", *llm_flags(server)]) == 0
+    swapped = read_episode(out / "rrd" / "stack-blocks-with-alternate-color" / f"{SEEDS}-swapped.rrd")
+    assert swapped.summary["success"] is False  # the label, not the reporter's verdict
+    assert "judge = True" in swapped.texts["llm/attempt1/parse_completion/1/completion"][0]
+    assert swapped.texts["verdict"][0].startswith("label: not achieved (swapped: ")
+    assert (out / "rrd" / "stack-blocks-with-alternate-color" / f"{SEEDS}-oracle.rrd").stat().st_size > 0

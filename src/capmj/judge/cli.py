@@ -67,6 +67,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--max-cost-usd", dest="max_cost_usd", type=float, default=None, metavar="USD",
                    help=f"stop judging once the run's LLM cost reaches USD (exit {EXIT_BUDGET})")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="result folder")
+    p.add_argument("--log", action="store_true",
+                   help="write DIR/rrd/<task>/<seed>-<case>.rrd per judged state: the state, the reporter's "
+                        "transcript and the label (open with python -m capmj.replay FILE --open)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
@@ -134,8 +137,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
                          cache_dir=llm["cache_dir"], cache_only=bool(args.cache_only),
                          case_max_tokens=args.case_max_tokens, case_max_cost_usd=args.case_max_cost_usd,
                          price=args.price)
-    judge = Judge(config)
     out: Path = args.out
+    judge = Judge(config, log_dir=out / "rrd" if args.log else None)
     out.mkdir(parents=True, exist_ok=True)
     try:
         the_set = build_set(tasks, seeds, kinds=kinds, progress=not args.no_progress)

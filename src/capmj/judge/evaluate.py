@@ -28,6 +28,7 @@ from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.llm import LLMClient, LLMConfig
 from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.record import NullRecorder, Recorder
 from capmj.tasks.protocol import episode_rng
 
 __all__ = ["JUDGE_REPORTERS", "JudgeConfig", "Judge"]
@@ -70,8 +71,11 @@ class JudgeConfig:
 class Judge:
     """Judges cases one at a time; keeps the world of the last (task, seed) for the next case."""
 
-    def __init__(self, config: JudgeConfig) -> None:
+    def __init__(self, config: JudgeConfig, log_dir: Path | None = None) -> None:
         self.config = config
+        self.log_dir = log_dir
+        """Write ``<log_dir>/<task>/<seed>-<case>.rrd`` per judged state (the state, the reporter's
+        transcript, the label) when set."""
         self.client: LLMClient | None = None
         if config.reporter != "predicate":
             assert config.model is not None  # checked by JudgeConfig
@@ -95,10 +99,11 @@ class Judge:
         t0 = time.perf_counter()
         stage = self._stage_for(case)
         stage.restart()
-        ctx = EpisodeContext(stage.task, case.seed, stage.scene, stage.world)
+        rec = self._recorder(case, stage)
+        ctx = EpisodeContext(stage.task, case.seed, stage.scene, stage.world, recorder=rec)
         reporter = make_reporter(self.config.reporter, self.config.prompts_dir) \
             if self.config.reporter != "predicate" else None
-        rec: dict[str, Any] = {
+        out: dict[str, Any] = {
             "task": case.task, "seed": case.seed, "case": case.case, "kind": case.kind, "label": case.label,
             "reporter": self.config.label, "verdict": None, "source": "unknown", "reason": "", "wrong": [],
             "errors": [], "predicate": None, "correct": False, "calls": 0, "cached_calls": 0,
@@ -108,19 +113,34 @@ class Judge:
             if reporter is not None:
                 reporter.start(ctx)  # the "before" image: the initial scene
             state = stage.place(case.poses())
-            rec["predicate"] = bool(stage.evaluate(state).success)
+            _frame(rec, stage)
+            out["predicate"] = bool(stage.evaluate(state).success)
             if reporter is None:
-                rec.update(verdict=rec["predicate"], source="predicate", reason="the task predicate")
+                out.update(verdict=out["predicate"], source="predicate", reason="the task predicate")
             else:
-                self._ask(ctx, reporter, case, rec, transcript)
+                self._ask(ctx, reporter, case, out, transcript)
         except Exception as exc:  # noqa: BLE001 - one broken case is recorded, the run goes on
-            rec["error"] = f"{type(exc).__name__}: {exc}"
+            out["error"] = f"{type(exc).__name__}: {exc}"
         finally:
             if reporter is not None:
                 reporter.close()
-        rec["correct"] = rec["verdict"] is not None and rec["verdict"] == case.label
-        rec["wall_s"] = round(time.perf_counter() - t0, 3)
-        return rec, [c.to_dict() if hasattr(c, "to_dict") else c for c in transcript]
+        out["correct"] = out["verdict"] is not None and out["verdict"] == case.label
+        out["wall_s"] = round(time.perf_counter() - t0, 3)
+        if not isinstance(rec, NullRecorder):
+            _finish_log(rec, stage, case, out)
+        return out, [c.to_dict() if hasattr(c, "to_dict") else c for c in transcript]
+
+    def _recorder(self, case: JudgeCase, stage: Stage) -> Recorder:
+        if self.log_dir is None:
+            return NullRecorder()
+        from capmj.log.recorder import RerunRecorder
+
+        rec = RerunRecorder(self.log_dir / case.task / f"{case.seed}-{case.case}.rrd", task=case.task,
+                            seed=case.seed, agent=f"judge {self.config.reporter}", model=self.config.model)
+        rec.attach(stage.world)
+        rec.text("goal", stage.scene.goal)
+        _frame(rec, stage)
+        return rec
 
     def _ask(self, ctx: EpisodeContext, reporter: Any, case: JudgeCase, rec: dict[str, Any],
              transcript: list[Any]) -> None:
@@ -146,3 +166,22 @@ class Judge:
         rec.update(calls=len(new), cached_calls=sum(r.cached for r in new),
                    prompt_tokens=meter.prompt_tokens, completion_tokens=meter.completion_tokens,
                    cost_usd=None if meter.source == "unknown" else round(meter.cost_usd, 10))
+
+
+def _frame(rec: Recorder, stage: Stage) -> None:
+    """One frame of every object's pose (the log shows the initial, then the judged state)."""
+    w = stage.world
+    rec.frame(w.time, {o.body: (w.pose(o.obj_id).pos, w.pose(o.obj_id).quat) for o in w.objects})
+
+
+def _finish_log(rec: Recorder, stage: Stage, case: JudgeCase, out: dict[str, Any]) -> None:
+    """The verdict text and the log's summary (the label as its success), then close the file."""
+    word = {True: "ACHIEVED", False: "NOT ACHIEVED", None: "UNKNOWN"}[out["verdict"]]
+    rec.text("verdict", f"label: {'achieved' if case.label else 'not achieved'} ({case.kind}: {case.detail})\n"
+                        f"reporter: {word} (from {out['source']}): {out['reason']}\n" + case.condition)
+    finish = getattr(rec, "finish", None)
+    if finish is not None:
+        finish({"task": case.task, "seed": case.seed, "agent": out["reporter"], "success": case.label,
+                "progress": case.progress, "goal": stage.scene.goal, "diagnostics": [case.condition] if case.condition else [],
+                "error": out["error"], "llm": {k: out[k] for k in ("verdict", "source", "reason", "wrong", "errors")}})
+    rec.close()
