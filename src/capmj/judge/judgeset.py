@@ -79,7 +79,7 @@ def _proposals(kind: str, base: SceneState, goal_ids: Sequence[int], movable: Se
     return fn(base, goal_ids, movable, rng)
 
 
-def _problem(stage: Stage, kind: str, prop: Proposal, state: SceneState, success: bool) -> str | None:
+def _problem(kind: str, prop: Proposal, state: SceneState, success: bool) -> str | None:
     """Why a realised proposal is not kept, else None."""
     want = kind == "near_inside"
     if success != want:
@@ -128,7 +128,7 @@ def build_cases(task: Task, seed: int, kinds: Iterable[str] = KINDS) -> tuple[li
             prop = replace(prop, layout=_stored(prop.layout))
             state = stage.realise(prop.layout)
             v = stage.evaluate(state)
-            problem = _problem(stage, kind, prop, state, v.success)
+            problem = _problem(kind, prop, state, v.success)
             if problem is None:
                 condition = "" if v.success else "; ".join(v.diagnostics)
                 cases.append(JudgeCase(name, seed, kind, kind, bool(v.success), condition, prop.detail, v.progress,

@@ -189,8 +189,7 @@ def wrong_bowl(state: SceneState, goal_ids: Sequence[int], movable: Sequence[int
         return
     full = {b for b in bowls for i in movable if P.in_bowl(state, i, b)}
     empty = [b for b in bowls if b not in full]
-    inside = [i for i in _candidates(state, goal_ids, movable, rng, lambda i: bool(full))
-              if any(P.in_bowl(state, i, b) for b in bowls)]
+    inside = _candidates(state, goal_ids, movable, rng, lambda i: any(P.in_bowl(state, i, b) for b in bowls))
     for i in inside:
         for b in (empty[int(k)] for k in rng.permutation(len(empty))):
             centre = state.pos(b)
