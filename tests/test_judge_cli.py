@@ -158,3 +158,14 @@ def test_log_writes_one_rrd_per_judged_state_with_the_transcript_and_the_label(
     assert "judge = True" in swapped.texts["llm/attempt1/parse_completion/1/completion"][0]
     assert swapped.texts["verdict"][0].startswith("label: not achieved (swapped: ")
     assert (out / "rrd" / "stack-blocks-with-alternate-color" / f"{SEEDS}-oracle.rrd").stat().st_size > 0
+
+
+def test_judge_takes_the_bench_llm_flags(tmp_path: Path) -> None:
+    from capmj.bench.cli import build_parser as bench_parser
+    from capmj.judge.cli import build_parser as judge_parser
+    from capmj.llm.options import llm_values
+
+    flags = ["--model", "openai/x", "--api-base", "http://127.0.0.1:1/v1", "--llm-timeout", "42",
+             "--llm-max-tokens", "99", "--llm-cache", str(tmp_path), "--temperature", "0.5"]
+    judged = llm_values(judge_parser().parse_args(["--out", str(tmp_path), *flags]))
+    assert judged == llm_values(bench_parser().parse_args(["--agent", "llm", *flags]))
