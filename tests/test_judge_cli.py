@@ -169,3 +169,27 @@ def test_judge_takes_the_bench_llm_flags(tmp_path: Path) -> None:
              "--llm-max-tokens", "99", "--llm-cache", str(tmp_path), "--temperature", "0.5"]
     judged = llm_values(judge_parser().parse_args(["--out", str(tmp_path), *flags]))
     assert judged == llm_values(bench_parser().parse_args(["--agent", "llm", *flags]))
+
+
+def test_from_a_run_judges_its_final_states_labelled_by_the_predicate(tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    assert main(["--tasks", "put-block-into-matching-bowl", "--seeds", SEEDS, "--agent", "oracle", "--workers", "0",
+                 "--no-log", "--no-progress", "--out", str(run)]) == 0
+    solved = json.loads((run / "episodes.jsonl").read_text().splitlines()[0])
+    assert solved["success"] is True
+    spoiled = json.loads(json.dumps(solved))  # the same episode with one block moved off its bowl
+    block = next(n for n in spoiled["final_poses"] if " block " in n)
+    spoiled["final_poses"][block][:3] = [0.65, 0.38, 0.02]
+    with (run / "episodes.jsonl").open("a") as f:
+        f.write(json.dumps(spoiled) + "\n" + json.dumps({"task": solved["task"], "seed": 1}) + "\n")
+    out = tmp_path / "out"
+    assert main(["judge", "--tasks", "put-block-into-matching-bowl", "--seeds", SEEDS, "--kinds", "oracle",
+                 "--from", str(run), "--reporter", "predicate", "--out", str(out), "--no-progress"]) == 0
+    cases = [json.loads(line) for line in (out / "cases.jsonl").read_text().splitlines()]
+    runs = [c for c in cases if c["kind"] == "run"]
+    assert [(c["case"], c["label"]) for c in runs] == [("run1", True), ("run2", False)]
+    assert "is not in the" in runs[1]["condition"]
+    skipped = [json.loads(line) for line in (out / "skipped.jsonl").read_text().splitlines()]
+    assert any(s["kind"] == "run" and "no final_poses" in s["reason"] for s in skipped)
+    kinds = json.loads((out / "summary.json").read_text())["kinds"]
+    assert kinds["run"]["n"] == 2 and kinds["run"]["accuracy"] == 1.0

@@ -11,6 +11,7 @@ just outside a tolerance, each checked by the task's own predicate after settlin
 | :mod:`capmj.judge.cases` | the :class:`~capmj.judge.cases.JudgeCase` record, placing and settling a case |
 | :mod:`capmj.judge.perturb` | the perturbations of a solved state (displaced, toppled, swapped, ...) |
 | :mod:`capmj.judge.judgeset` | building the labelled set for tasks × seeds |
+| :mod:`capmj.judge.fromrun` | ``--from RUN_DIR``: a real run's final states as cases |
 | :mod:`capmj.judge.metrics` | accuracy, balanced accuracy, precision, recall, Wilson intervals |
 | :mod:`capmj.judge.evaluate` | running a reporter (text, vlm, predicate) over the set |
 | :mod:`capmj.judge.compare` | ``judge report A B``: two reporters on the same states (McNemar) |

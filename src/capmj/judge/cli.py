@@ -66,6 +66,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"stop judging once the run's LLM tokens reach N (exit {EXIT_BUDGET})")
     b.add_argument("--max-cost-usd", dest="max_cost_usd", type=float, default=None, metavar="USD",
                    help=f"stop judging once the run's LLM cost reaches USD (exit {EXIT_BUDGET})")
+    p.add_argument("--from", dest="from_run", type=Path, default=None, metavar="RUN_DIR",
+                   help="also judge the final states of every episode of a bench result folder (kind 'run', "
+                        "labelled by the task predicate)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="result folder")
     p.add_argument("--log", action="store_true",
                    help="write DIR/rrd/<task>/<seed>-<case>.rrd per judged state: the state, the reporter's "
@@ -145,13 +148,20 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
     cases = list(the_set.cases)
+    skipped = [s.__dict__ for s in the_set.skipped]
+    if args.from_run is not None:
+        from capmj.judge.fromrun import RUN_KIND, run_cases
+
+        extra, problems = run_cases(args.from_run)
+        cases += extra
+        skipped += [{"kind": RUN_KIND, "reason": p} for p in problems]
     _write_jsonl(out / "cases.jsonl", [c.to_dict() for c in cases])
-    _write_jsonl(out / "skipped.jsonl", [s.__dict__ for s in the_set.skipped])
+    _write_jsonl(out / "skipped.jsonl", skipped)
     records, transcripts, stopped = _judge_all(judge, cases, args)
     _write_jsonl(out / "judged.jsonl", records)
     _write_jsonl(out / "transcripts.jsonl", transcripts)
     summary: dict[str, Any] = {"reporter": config.label, "set_digest": set_digest(cases), "pairs": len(tasks) * len(seeds),
-               "cases": len(cases), "judged": len(records), "skipped": len(the_set.skipped), "stopped": stopped,
+               "cases": len(cases), "judged": len(records), "skipped": len(skipped), "stopped": stopped,
                "overall": metrics(records), "tasks": group_metrics(records, lambda r: str(r["task"])),
                "kinds": group_metrics(records, lambda r: str(r["kind"]))}
     _write_text(out / "summary.json", json.dumps(summary, indent=2, sort_keys=True) + "\n")
