@@ -56,6 +56,7 @@ examples:
   python -m capmj.bench --list                            # tasks, their plugins, tags, broken plugins
   python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table, paired McNemar test
   python -m capmj.bench replay-check runs/llm             # re-run from the LLM cache alone, compare
+  python -m capmj.bench judge --reporter text --model M --out runs/judge   # score a reporter on labelled states
   python -m capmj.bench export runs/llm --format chat-jsonl --out calls.jsonl   (see docs/export.md)
 
 results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
@@ -581,6 +582,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from capmj.bench.replay_check import main as replay_check_main
 
         return replay_check_main(argv[1:])
+    if argv and argv[0] == "judge":
+        from capmj.judge.cli import main as judge_main
+
+        return judge_main(argv[1:])
     if argv and argv[0] == "export":
         from capmj.bench.export import main as export_main
 

@@ -8,7 +8,7 @@ this class (it gets the API facade in ``capmj.agents``).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import mujoco
 import numpy as np
@@ -199,6 +199,22 @@ class World:
     def contacts_of(self, obj_id: int) -> set[int]:
         """Ids of what touches an object: other object ids, 0 for table/floor/robot, -1 for the cup."""
         return contact_owners(self.data, self.geom_obj, self.cup_geom, obj_id)
+
+    def place_objects(self, poses: Mapping[int, Pose]) -> None:
+        """Put movable objects at the given poses, at rest (set-up only, never during an episode).
+
+        For building labelled final states (``capmj.judge``): the caller settles the world
+        afterwards, so what a reporter is shown is a resting physical state, not a teleported one.
+        Fixed objects cannot be placed; an id that is not movable raises ``KeyError``.
+        """
+        for obj_id, pose in poses.items():
+            if obj_id not in self.free_qpos:
+                raise KeyError(f"object {obj_id} is not movable; movable objects: {list(self.movable_ids)}")
+            q, v = self.free_qpos[obj_id], self.free_dof[obj_id]
+            self.data.qpos[q:q + 3] = pose.pos
+            self.data.qpos[q + 3:q + 7] = pose.quat
+            self.data.qvel[v:v + 6] = 0.0
+        mujoco.mj_forward(self.model, self.data)
 
     # ------------------------------------------------------------------ reset
     def snapshot(self) -> WorldSnapshot:
