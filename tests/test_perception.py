@@ -1,0 +1,127 @@
+"""The perception layer: isolation from the simulator, footprint geometry, detections vs the truth.
+
+Only these tests (and ``benchmarks/perception.py``) read the ground truth; the perceiver never
+does.  The isolation tests run the perceiver on images saved to disk in a fresh interpreter that
+imports no world and no MuJoCo, so a leak of simulator state into ``capmj.perception`` fails here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from capmj.perception import ClassicalPerceiver, RGBDBundle
+from capmj.perception.footprint import fit_l, min_area_rect, square_yaw
+from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def _render(objects) -> tuple[RGBDBundle, list]:
+    """The three views of a settled world and its true objects (poses read after settling)."""
+    from capmj.sim.cameras import CameraRig
+    from capmj.sim.world import World
+
+    world = World(objects)
+    world.settle()
+    with CameraRig(world) as rig:
+        views = rig.render_all(seg=True, heightmap=False).views.values()
+        bundle = RGBDBundle.from_frames(views)
+    truth = [(o, world.pose(o.obj_id)) for o in objects]
+    return bundle, truth
+
+
+def _spawn(task: str, seed: int):
+    from capmj.tasks.protocol import make_scene
+    from capmj.tasks.registry import get_task
+
+    return make_scene(get_task(task), seed).objects
+
+
+def _subprocess_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(SRC), env.get("PYTHONPATH", "")])
+    return env
+
+
+# ---------------------------------------------------------------------- isolation
+def test_package_imports_no_simulator() -> None:
+    code = ("import sys, pkgutil, importlib, capmj.perception as p\n"
+            "for m in pkgutil.iter_modules(p.__path__): importlib.import_module('capmj.perception.' + m.name)\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m in "
+            "('capmj.sim.world', 'capmj.sim.cameras', 'capmj.sim.scene', 'capmj.tasks', 'capmj.agents'))\n"
+            "print(bad)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_subprocess_env(),
+                         check=True, timeout=120)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_bundle_carries_no_segmentation_and_round_trips(tmp_path: Path) -> None:
+    bundle, _ = _render(_spawn("put-block-into-matching-bowl", 10001))
+    for view in bundle.views:
+        assert set(vars(view)) == {"name", "rgb", "depth", "intrinsics", "extrinsics"}
+    back = RGBDBundle.load(bundle.save(tmp_path / "scene.npz"))
+    assert [v.name for v in back.views] == [v.name for v in bundle.views] == ["front", "left", "right"]
+    for a, b in zip(bundle.views, back.views):
+        assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
+        assert np.array_equal(a.intrinsics, b.intrinsics) and np.array_equal(a.extrinsics, b.extrinsics)
+
+
+def test_perceiver_on_saved_images_in_a_process_without_a_world(tmp_path: Path) -> None:
+    """Images on disk -> a fresh interpreter with no world -> the same detections as in-process,
+    and every true object found there with its kind and colour."""
+    bundle, truth = _render(_spawn("stack-blocks-of-same-color", 10003))
+    path = bundle.save(tmp_path / "scene.npz")
+    code = ("import json, sys\n"
+            "from capmj.perception import ClassicalPerceiver, RGBDBundle\n"
+            f"dets = ClassicalPerceiver().perceive(RGBDBundle.load({str(path)!r}))\n"
+            "assert 'mujoco' not in sys.modules and 'capmj.sim.world' not in sys.modules\n"
+            "print(json.dumps([[d.kind, d.color, d.size, list(d.position)] for d in dets]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_subprocess_env(),
+                         check=True, timeout=300)
+    remote = json.loads(out.stdout)
+    local = [[d.kind, d.color, d.size, list(d.position)] for d in ClassicalPerceiver().perceive(bundle)]
+    assert remote == local  # deterministic across processes
+    assert len(remote) == len(truth)
+    for spec, pose in truth:
+        near = min(remote, key=lambda d: math.dist(d[3][:2], pose.pos[:2]))
+        assert (near[0], near[1], near[2]) == (spec.kind, spec.color, spec.size), spec.name
+        assert math.dist(near[3][:2], pose.pos[:2]) < 0.01, spec.name
+
+
+# ---------------------------------------------------------------------- footprint geometry
+def _rect_points(cx: float, cy: float, length: float, width: float, angle: float, step: float) -> np.ndarray:
+    u, v = np.meshgrid(np.arange(-length / 2, length / 2 + 1e-9, step), np.arange(-width / 2, width / 2 + 1e-9, step))
+    c, s = math.cos(angle), math.sin(angle)
+    return np.stack([cx + c * u.ravel() - s * v.ravel(), cy + s * u.ravel() + c * v.ravel()], axis=1)
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, -1.2, 1.5])
+def test_min_area_rect_recovers_a_rotated_rectangle(angle: float) -> None:
+    r = min_area_rect(_rect_points(0.4, -0.1, 0.1, 0.04, angle, 0.002))
+    assert (r.cx, r.cy) == pytest.approx((0.4, -0.1), abs=1e-6)
+    assert (r.length, r.width) == pytest.approx((0.1, 0.04), abs=1e-6)
+    assert math.remainder(r.angle - angle, math.pi) == pytest.approx(0.0, abs=1e-6)
+    square = min_area_rect(_rect_points(0.0, 0.0, 0.04, 0.04, angle, 0.002))
+    assert math.remainder(square_yaw(square) - angle, math.pi / 2) == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.8, 2.5, -2.0])
+def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
+    # The walls of mjcf/fixture.xml in the fixture's frame, then turned by yaw about the origin (0.5, 0.1).
+    long_wall = _rect_points(0.02, -0.025, FIXTURE_LONG, FIXTURE_WALL, 0.0, 0.002)
+    short_wall = _rect_points(-0.025, 0.005, FIXTURE_WALL, FIXTURE_SHORT, 0.0, 0.002)
+    local = np.concatenate([long_wall, short_wall])
+    c, s = math.cos(yaw), math.sin(yaw)
+    xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
+    fit = fit_l(xy, min_area_rect(xy), 0.002)
+    assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
+    assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
+    assert fit.mismatch < 0.05
