@@ -125,3 +125,56 @@ def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
     assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     assert fit.mismatch < 0.05
+
+
+# ---------------------------------------------------------------------- accuracy against the truth
+def _truths(truth) -> list:
+    from capmj.perception.score import TrueObject
+
+    return [TrueObject(o.kind, o.color, o.size, pose.pos, pose.yaw) for o, pose in truth]
+
+
+@pytest.mark.parametrize("task,seed", [("stack-blocks-by-color-and-size", 10005),
+                                       ("put-block-into-mismatching-bowl", 10007),
+                                       ("construct-circle-ball-middle", 10009)])
+def test_spawn_scene_detected_exactly(task: str, seed: int) -> None:
+    from capmj.perception.score import score
+
+    bundle, truth = _render(_spawn(task, seed))
+    s = score(ClassicalPerceiver().perceive(bundle), _truths(truth))
+    assert (s.recall, s.precision) == (1.0, 1.0), s.to_dict()
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches), s.to_dict()
+    assert max(m.position_error for m in s.matches) < 0.005, s.to_dict()
+    assert max(m.yaw_error or 0.0 for m in s.matches) < math.radians(8), s.to_dict()
+
+
+def test_block_on_a_zone_of_its_own_colour_is_its_own_object() -> None:
+    from capmj.perception.score import score
+    from capmj.sim.objects import ObjectSpec
+
+    objects = [ObjectSpec(1, "zone", "red", (0.5, 0.1, 0.0005), 0.4),
+               ObjectSpec(2, "block", "red", (0.52, 0.09, 0.02), 0.1, "small"),
+               ObjectSpec(3, "zone", "gray", (0.45, -0.2, 0.0005), -0.2, scale=1.5),
+               ObjectSpec(4, "block", "silver", (0.45, -0.2, 0.01), 0.7, "tiny")]
+    bundle, truth = _render(objects)
+    dets = ClassicalPerceiver().perceive(bundle)
+    s = score(dets, _truths(truth))
+    assert (s.recall, s.precision) == (1.0, 1.0), s.to_dict()
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches), s.to_dict()
+    gray = next(d for d in dets if d.kind == "zone" and d.color == "gray")
+    assert gray.scale == pytest.approx(1.5, abs=0.05)
+
+
+def test_score_gates_and_counts_confusions() -> None:
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("block", "red", "small", (0.5, 0.0, 0.02), 0.1),
+              TrueObject("block", "blue", "small", (0.4, 0.0, 0.02), 0.0)]
+    dets = [Detection("block", "pink", "small", 1.0, (0.505, 0.0, 0.02), 0.1 + math.pi / 2, box, 0.9),
+            Detection("block", "blue", "big", 1.0, (0.4, 0.05, 0.02), 0.0, box, 0.9)]  # 5 cm off: no match
+    s = score(dets, truths)
+    assert (s.recall, s.precision) == (0.5, 0.5)
+    assert s.confusions == (("red", "pink"),)
+    assert s.matches[0].yaw_error == pytest.approx(0.0, abs=1e-9)  # a square repeats every 90 degrees

@@ -64,28 +64,37 @@ class TopDownMap:
                          self.origin[1] + (np.asarray(rows) + 0.5) * self.cell], axis=-1)
 
 
-def _upright(points: np.ndarray) -> np.ndarray:
-    """(H, W) bool: the surface at each pixel faces up (false at depth edges and on the border)."""
-    du = points[:-1, 1:] - points[:-1, :-1]
-    dv = points[1:, :-1] - points[:-1, :-1]
-    n = np.cross(du, dv)
-    norm = np.linalg.norm(n, axis=-1)
-    step = np.maximum(np.linalg.norm(du, axis=-1), np.linalg.norm(dv, axis=-1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ok = (np.abs(n[..., 2]) > UPRIGHT_COS * norm) & (step < 0.006) & (norm > 0)
-    out = np.zeros(points.shape[:2], dtype=bool)
-    out[:-1, :-1] = ok
-    return out
-
-
 def _view_points(view: CameraImage) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(points (N, 3), rgb (N, 3), upright (N,)) of the pixels of one view over the workspace."""
-    pts = view.points()
-    up = _upright(pts)
-    w = WORKSPACE
-    keep = ((view.depth < _DEPTH_FAR) & (pts[..., 0] >= w.xmin) & (pts[..., 0] < w.xmax)
-            & (pts[..., 1] >= w.ymin) & (pts[..., 1] < w.ymax) & (pts[..., 2] > -0.01) & (pts[..., 2] < Z_MAX))
-    return pts[keep], view.rgb[keep], up[keep]
+    """(points (N, 3), rgb (N, 3), upright (N,)) of the pixels of one view over the workspace.
+
+    A pixel is upright when the plane through it and its right and lower neighbours faces up;
+    pixels at depth edges (a neighbour farther than 6 mm) and on the image border are not.  The
+    normals are computed only for the pixels kept, in float32: this is the perceiver's hot loop.
+    """
+    h, w = view.shape
+    k, pose = view.intrinsics, view.extrinsics
+    rot = pose[:3, :3].astype(np.float32)
+    a = ((np.arange(w) + 0.5 - k[0, 2]) / k[0, 0]).astype(np.float32)
+    b = ((np.arange(h) + 0.5 - k[1, 2]) / k[1, 1]).astype(np.float32)
+    rays = a[None, :, None] * rot[:, 0] + b[:, None, None] * rot[:, 1] + rot[:, 2]  # world direction per unit depth
+    pts = view.depth[..., None] * rays + pose[:3, 3].astype(np.float32)
+    ws = WORKSPACE
+    x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
+    keep = ((view.depth < _DEPTH_FAR) & (x >= ws.xmin) & (x < ws.xmax) & (y >= ws.ymin) & (y < ws.ymax)
+            & (z > -0.01) & (z < Z_MAX))
+    keep[-1, :] = False
+    keep[:, -1] = False
+    kv, ku = np.nonzero(keep)
+    p0 = pts[kv, ku]
+    du = pts[kv, ku + 1] - p0
+    dv = pts[kv + 1, ku] - p0
+    nx = du[:, 1] * dv[:, 2] - du[:, 2] * dv[:, 1]
+    ny = du[:, 2] * dv[:, 0] - du[:, 0] * dv[:, 2]
+    nz = du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]
+    n2 = nx * nx + ny * ny + nz * nz
+    step2 = np.maximum((du * du).sum(axis=1), (dv * dv).sum(axis=1))
+    up = (nz * nz > UPRIGHT_COS ** 2 * n2) & (n2 > 0) & (step2 < 0.006 ** 2)
+    return p0.astype(np.float64), view.rgb[kv, ku], up
 
 
 def fuse(bundle: RGBDBundle, cell: float = CELL) -> TopDownMap:
@@ -109,9 +118,12 @@ def fuse(bundle: RGBDBundle, cell: float = CELL) -> TopDownMap:
     c = np.clip(((pts[:, 0] - w.xmin) / cell).astype(np.int64), 0, cols - 1)
     r = np.clip(((pts[:, 1] - w.ymin) / cell).astype(np.int64), 0, rows - 1)
     flat = r * cols + c
-    order = np.lexsort((pts[:, 2], flat))  # by cell, then height: each cell's last entry is its top
-    flat_sorted = flat[order]
-    last = order[np.r_[flat_sorted[1:] != flat_sorted[:-1], True]]
+    top = np.full(rows * cols, -np.inf)
+    np.maximum.at(top, flat, pts[:, 2])
+    winners = np.flatnonzero(pts[:, 2] == top[flat])
+    first = np.full(rows * cols, len(pts), dtype=np.int64)
+    np.minimum.at(first, flat[winners], winners)  # ties: the first point in view order, deterministic
+    last = first[first < len(pts)]
     height = np.full(rows * cols, np.nan)
     lab = np.full((rows * cols, 3), np.nan)
     camera = np.full(rows * cols, -1, dtype=np.int64)

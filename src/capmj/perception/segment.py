@@ -11,7 +11,7 @@ all different segments.  Finally each unnamed raised cell (a ball's flanks, bloc
 the nearest raised segment within :data:`GROW_CELLS`: geometry without colour.
 
 Connectivity is computed as a graph (:func:`scipy.sparse.csgraph.connected_components` over
-4-neighbour edges), which lets the height test be part of the adjacency; it is exact and
+8-neighbour edges), which lets the height test be part of the adjacency; it is exact and
 deterministic.
 """
 
@@ -88,14 +88,16 @@ def _name_cells(m: TopDownMap) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _components(key: np.ndarray, height: np.ndarray) -> np.ndarray:
-    """Component id per cell (-1 where ``key`` < 0): 4-neighbours join when their keys are equal
-    and their heights differ by less than :data:`MAX_STEP`."""
+    """Component id per cell (-1 where ``key`` < 0): 8-neighbours join when their keys are equal
+    and their heights differ by less than :data:`MAX_STEP` (diagonals keep a bowl's 3-cell-wide
+    rim in one piece where a cell of it is unnamed)."""
     rows, cols = key.shape
     n = rows * cols
     flat_key, flat_h = key.reshape(-1), height.reshape(-1)
     ids = np.arange(n).reshape(rows, cols)
     src, dst = [], []
-    for a, b in ((ids[:, :-1], ids[:, 1:]), (ids[:-1, :], ids[1:, :])):
+    pairs = ((ids[:, :-1], ids[:, 1:]), (ids[:-1, :], ids[1:, :]), (ids[:-1, :-1], ids[1:, 1:]), (ids[:-1, 1:], ids[1:, :-1]))
+    for a, b in pairs:
         a, b = a.reshape(-1), b.reshape(-1)
         join = (flat_key[a] >= 0) & (flat_key[a] == flat_key[b]) & (np.abs(flat_h[a] - flat_h[b]) < MAX_STEP)
         src.append(a[join])
