@@ -178,3 +178,54 @@ def test_score_gates_and_counts_confusions() -> None:
     assert (s.recall, s.precision) == (0.5, 0.5)
     assert s.confusions == (("red", "pink"),)
     assert s.matches[0].yaw_error == pytest.approx(0.0, abs=1e-9)  # a square repeats every 90 degrees
+
+
+# ---------------------------------------------------------------------- names and tracking
+def _block(color: str, x: float, y: float, z: float, size: str = "small"):
+    from capmj.perception.detect import Detection
+    from capmj.sim.objects import BLOCK_SIZES
+
+    h = BLOCK_SIZES[size] / 2
+    return Detection("block", color, size, 1.0, (x, y, z), 0.0, ((x - h, y - h, z - h), (x + h, y + h, z + h)), 0.9)
+
+
+def test_object_names_are_todays_format() -> None:
+    from capmj.perception.track import object_name
+    from capmj.tasks.builtin import BENCHMARK_TASKS, GENERATED_TASKS
+
+    for task in BENCHMARK_TASKS + GENERATED_TASKS:
+        for o in _spawn(task, 10001):
+            assert object_name(o.kind, o.color, o.size, o.obj_id) == o.name
+
+
+def test_a_tower_of_five_keeps_all_five_names() -> None:
+    from capmj.perception.track import Tracker
+
+    colours = ["red", "blue", "green", "yellow", "pink"]
+    table = [_block(c, 0.3 + 0.08 * k, 0.2, 0.02) for k, c in enumerate(colours)]
+    tracker = Tracker.start(table)
+    names = tracker.names
+    assert [t.obj_id for t in tracker.objects] == [1, 2, 3, 4, 5]
+    base = (0.5, -0.2)
+    ids = {t.detection.color: t.obj_id for t in tracker.objects}
+    for level, colour in enumerate(colours):
+        # The robot puts `colour` on the tower; the cameras see the tower's top and the table.
+        top = (base[0], base[1], 0.02 + 0.04 * level)
+        seen = [_block(colour, *top)] + [d for d in table[level + 1:]]
+        tracker = tracker.update(seen, moved={ids[colour]: top})
+        assert tracker.names == names  # every block keeps its name, hidden ones included
+    hidden = [t.detection.color for t in tracker.objects if not t.visible]
+    assert sorted(hidden) == sorted(colours[:-1])
+    # Taking the top block away (to the table) leaves the rest of the tower remembered.
+    tracker = tracker.update([_block("yellow", base[0], base[1], 0.14), _block("pink", 0.7, 0.3, 0.02)],
+                             moved={ids["pink"]: (0.7, 0.3, 0.02)})
+    assert tracker.names == names
+    assert {t.detection.color for t in tracker.objects if t.visible} == {"yellow", "pink"}
+
+
+def test_a_block_that_vanishes_is_dropped_and_new_ones_get_fresh_ids() -> None:
+    from capmj.perception.track import Tracker
+
+    tracker = Tracker.start([_block("red", 0.4, 0.0, 0.02), _block("blue", 0.6, 0.0, 0.02)])
+    tracker = tracker.update([_block("red", 0.401, 0.0, 0.02), _block("gold", 0.5, 0.3, 0.01, "tiny")])
+    assert tracker.names == ["movable small red block with obj_id 1", "movable tiny gold block with obj_id 3"]
