@@ -210,6 +210,10 @@ class PlannerAPI:
             lines.append(f"[{e['i']:3d} t={e['sim_time']:.2f}s] {e['fn']}({', '.join(e['args'])}) {out}")
         return "\n".join(lines)
 
+    def object_names(self) -> list[str]:
+        """The names of every object, as this API knows them (unlogged: for prompts and plan globals)."""
+        return self._names()
+
     def objects_text(self) -> str:
         """The ``objects = [...]`` line listing every object of the scene for prompts."""
         return f"objects = {self._names()!r}"

@@ -35,11 +35,11 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Callable
 
-from capmj.agents.api import PlannerAPI
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
+from capmj.agents.perceived import make_api
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
@@ -102,7 +102,8 @@ class LLMAgent:
                  replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
                  replan_retries: int = DEFAULT_REPLAN_RETRIES,
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
-                 price: str | None = None) -> None:
+                 price: str | None = None, perception: str = "state") -> None:
+        self.perception = perception  # the planner API's source: capmj.agents.perceived.PERCEPTION_MODES
         if on_unknown not in ON_UNKNOWN:
             raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
         replan_temperature = _at_least("replan_temperature", replan_temperature, float, "a number", 0)
@@ -217,7 +218,7 @@ class LLMAgent:
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
                  reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback]
                  ) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
-        api = PlannerAPI(ctx)
+        api = make_api(ctx, self.perception)
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,

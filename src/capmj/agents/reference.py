@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.perceived import make_api
 from capmj.agents.base import EpisodeContext
 from capmj.agents.sandbox import SandboxBudget, run_code
 from capmj.errors import AgentError
@@ -61,15 +61,17 @@ class ReferenceAgent:
     name = "reference"
     model = None
 
-    def __init__(self, budget: SandboxBudget | None = None) -> None:
+    def __init__(self, budget: SandboxBudget | None = None, perception: str = "state") -> None:
         self.budget = budget or REFERENCE_BUDGET
+        self.perception = perception
+        """``state`` (the API reads the simulator) or ``rgbd`` (the cameras: :mod:`capmj.agents.perceived`)."""
 
     def act(self, ctx: EpisodeContext) -> None:
         code, source = reference_plan(ctx.task)
-        api = PlannerAPI(ctx)
+        api = make_api(ctx, self.perception)
         env: dict[str, object] = dict(api.functions())
         env["goal"] = ctx.scene.goal
-        env["objects"] = [o.name for o in ctx.world.objects]
+        env["objects"] = api.object_names()
         ctx.recorder.text("reference/plan", f"# {source}\n{api.objects_text()}\n# {ctx.scene.goal}\n{code}")
         output: list[str] = []
         try:

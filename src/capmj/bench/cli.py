@@ -33,9 +33,10 @@ TEST_SEEDS = "10001:10101:2"
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
                "replan_retries", "timeout_s", "max_tokens", "cache_dir", "cache_only", "episode_max_tokens",
-               "episode_max_cost_usd", "price")
+               "episode_max_cost_usd", "price", "perception")
 """The LLM agent's keyword arguments the command line sets (the shared client options among them,
-:data:`capmj.llm.options.LLM_OPTIONS`, by their ``LLMConfig`` field names)."""
+:data:`capmj.llm.options.LLM_OPTIONS`, by their ``LLMConfig`` field names); ``perception`` is also
+the reference agent's."""
 CONFIRM_LLM_EPISODES = 100
 """More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
 LLM_CONCURRENCY = 4
@@ -79,6 +80,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"seeds as a list '1,3,5' and/or ranges 'start:stop[:step]' (stop excluded); "
                         f"default: the test split {TEST_SEEDS} (50 odd seeds from 10001)")
     p.add_argument("--agent", default=None, help="agent: oracle (default), reference, llm")
+    p.add_argument("--perception", default=None, choices=("state", "rgbd"),
+                   help="what the planner API of the reference and llm agents reads: the simulator (state, "
+                        "default) or the cameras (rgbd; see docs/perception.md)")
     g = p.add_argument_group("LLM agent options (passed to the agent; see docs/llm.md)")
     add_llm_options(g)  # --model, --api-base, --temperature, --llm-timeout, --llm-max-tokens, --llm-cache
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")

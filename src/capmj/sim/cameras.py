@@ -335,14 +335,16 @@ class CameraRig:
         return self._cam_ids[self._checked(camera)]
 
     # ------------------------------------------------------------------ public
-    def render(self, camera: str, *, seg: bool = True) -> CameraFrame:
+    def render(self, camera: str, *, seg: bool = True, include_robot: bool = True) -> CameraFrame:
         """Render one perspective camera: RGB, metric depth, object segmentation, calibration.
 
         ``seg=False`` skips the segmentation (``frame.seg`` is None): one pass instead of two.
+        ``include_robot=False`` leaves the arm out: the picture a robot takes after moving its arm
+        out of view (the perceived planner API uses it; the arm stays where it is).
         """
         cid = self._camera_id(camera)
         mjr = self._context()
-        scene = self._update(cid)
+        scene = self._update(cid, hide_robot=not include_robot)
         rgb, zbuf, ids = self._draw(scene, mjr, self.width, self.height, seg)
         depth = self._metric_depth(zbuf, orthographic=False)
         return CameraFrame(

@@ -1,0 +1,168 @@
+"""The planner API answered from the cameras (``--perception rgbd``) instead of the simulator.
+
+:class:`PerceivedAPI` is the :class:`~capmj.agents.api.PlannerAPI` with its view of the table
+swapped: names, positions, yaws, boxes and footprints come from :class:`PerceivedScene`, the
+tracked detections of the built-in perceiver (:mod:`capmj.perception`), never from the world's
+object state.  Everything else is unchanged — name resolution, argument checks, logging, the
+footprint geometry — so every prompt, example and reference plan runs as it is.
+
+The world is still used for what a real robot has: rendering its cameras (RGB + depth only,
+through :class:`capmj.perception.RGBDBundle`), its clock, and the pick-and-place primitive,
+which acts in real physics at the *perceived* position, so a wrong estimate is a real miss.  The
+scene is perceived once at the start and again after every pick-and-place.  Pictures are taken
+without the arm in them (as after moving it out of view; it is not moved), and each move the robot
+made is handed to the tracker, so the moved object keeps its id and blocks hidden in a tower keep
+theirs (:class:`capmj.perception.track.Tracker`).
+
+The primitive reports which object it gripped by its simulator id; the robot only knows that it
+gripped something, so the result is translated to the perceived object at the pick point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from capmj.agents.api import PlannerAPI
+from capmj.agents.base import EpisodeContext
+from capmj.agents.footprints import Disc, Footprints, Part, Rect
+from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
+from capmj.perception.track import Tracker
+from capmj.sim.motion import PrimitiveResult
+from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL, ObjectSpec
+from capmj.sim.pose import yaw_quat
+from capmj.sim.state import Pose
+
+PERCEPTION_MODES: tuple[str, ...] = ("state", "rgbd")
+"""``state``: the API reads the simulator (the default); ``rgbd``: it reads the cameras."""
+
+
+class PerceivedScene:
+    """What the robot knows of the table: the tracked detections, as specs, poses and boxes.
+
+    It offers the part of :class:`~capmj.sim.world.World` the planner API reads (``objects``,
+    ``objects_by_id``, ``pose``, ``aabb``, ``top_z``, ``time``), answered from perception.
+    """
+
+    def __init__(self, world: Any, perceiver: Perceiver | None = None) -> None:
+        from capmj.sim.cameras import CameraRig
+
+        self._world = world
+        self._perceiver: Perceiver = perceiver or ClassicalPerceiver()
+        self._rig = CameraRig(world)
+        self.calls = 0
+        self.tracker = Tracker.start(self._perceive())
+
+    def _perceive(self) -> tuple:
+        frames = [self._rig.render(name, seg=False, include_robot=False) for name in self._rig.camera_names]
+        self.calls += 1
+        return self._perceiver.perceive(RGBDBundle.from_frames(frames))
+
+    def refresh(self, moved: dict[int, tuple[float, float, float]]) -> None:
+        """Perceive again after the robot moved the objects in ``moved`` (id -> where it put them)."""
+        self.tracker = self.tracker.update(self._perceive(), moved)
+
+    def close(self) -> None:
+        self._rig.close()
+
+    # ------------------------------------------------------------------ the World subset
+    @property
+    def time(self) -> float:
+        return float(self._world.time)
+
+    @property
+    def objects(self) -> tuple[ObjectSpec, ...]:
+        out = []
+        for t in self.tracker.objects:
+            d = t.detection
+            out.append(ObjectSpec(t.obj_id, d.kind, d.color, d.position, d.yaw, d.size, d.scale))  # type: ignore[arg-type]
+        return tuple(out)
+
+    @property
+    def objects_by_id(self) -> dict[int, ObjectSpec]:
+        return {o.obj_id: o for o in self.objects}
+
+    def pose(self, obj_id: int) -> Pose:
+        d = self.tracker.by_id(obj_id).detection
+        return Pose.of(d.position, yaw_quat(d.yaw))
+
+    def aabb(self, obj_id: int) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.tracker.by_id(obj_id).detection.aabb
+        return np.array(lo, float), np.array(hi, float)
+
+    def top_z(self, obj_id: int) -> float:
+        return float(self.tracker.by_id(obj_id).detection.aabb[1][2])
+
+    def geom_parts(self, obj_id: int) -> list[Part]:
+        """The footprint parts of a detection: its square, its disc, or a fixture's two walls."""
+        d = self.tracker.by_id(obj_id).detection
+        x, y, _ = d.position
+        if d.kind in ("bowl", "ball"):
+            return [Disc(x, y, (d.aabb[1][0] - d.aabb[0][0]) / 2)]
+        if d.kind == "fixture":
+            c, s = math.cos(d.yaw), math.sin(d.yaw)
+            walls = (((0.02, -0.025), FIXTURE_LONG / 2, FIXTURE_WALL / 2),
+                     ((-0.025, 0.005), FIXTURE_WALL / 2, FIXTURE_SHORT / 2))  # mjcf/fixture.xml
+            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in walls]
+        half = (d.aabb[1][2] - d.aabb[0][2]) / 2 if d.kind == "block" else 0.06 * d.scale
+        return [Rect(x, y, d.yaw, half, half)]
+
+    def footprints(self) -> Footprints:
+        return Footprints(lambda: self.objects, self.pose, self.aabb, self.top_z, self.geom_parts)
+
+
+class _PerceivingContext:
+    """The episode context as the perceived API uses it: every pick-and-place is followed by a
+    fresh perception, and the gripped object is named by perception, not by the simulator."""
+
+    def __init__(self, ctx: EpisodeContext, scene: PerceivedScene) -> None:
+        self._ctx = ctx
+        self._scene = scene
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._ctx, name)
+
+    def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
+        held = self._held_at(pick)
+        res = self._ctx.pick_and_place(pick, place, place_yaw)
+        gripped = held if res.obj_id is not None else None
+        moved = {held: tuple(float(v) for v in place)} if res.ok and held is not None else {}
+        self._scene.refresh(moved)  # type: ignore[arg-type]
+        return replace(res, obj_id=gripped)
+
+    def _held_at(self, pick: np.ndarray) -> int | None:
+        """The perceived movable object whose footprint centre is nearest the pick point (xy)."""
+        best: tuple[float, int] | None = None
+        for o in self._scene.objects:
+            if o.fixed:
+                continue
+            dist = math.hypot(o.pos[0] - float(pick[0]), o.pos[1] - float(pick[1]))
+            if best is None or dist < best[0]:
+                best = (dist, o.obj_id)
+        return best[1] if best is not None and best[0] < 0.05 else None
+
+
+class PerceivedAPI(PlannerAPI):
+    """The planner API over :class:`PerceivedScene` (see the module docstring)."""
+
+    def __init__(self, ctx: EpisodeContext, perceiver: Perceiver | None = None) -> None:
+        super().__init__(ctx)
+        self.scene = PerceivedScene(ctx.world, perceiver)
+        self._world = self.scene  # type: ignore[assignment]
+        self._ctx = _PerceivingContext(ctx, self.scene)  # type: ignore[assignment]
+        self._footprints = self.scene.footprints()
+
+
+def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:
+    """The planner API of an episode in a perception mode (:data:`PERCEPTION_MODES`)."""
+    if perception == "state":
+        return PlannerAPI(ctx)
+    if perception == "rgbd":
+        return PerceivedAPI(ctx)
+    raise ValueError(f"unknown perception mode {perception!r}; valid modes: {', '.join(PERCEPTION_MODES)}")
+
+
+__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "make_api"]

@@ -1,0 +1,121 @@
+"""Scoring detections against the truth: one-to-one matching and the errors of each match.
+
+The perceiver never sees the truth; benchmarks and tests hand it to :func:`score` as plain
+:class:`TrueObject` records, so this module needs no world either.  Detections and true objects
+are matched one-to-one by minimum total 3-D distance between centres (the Hungarian algorithm,
+:func:`scipy.optimize.linear_sum_assignment`), a pair counting only within :data:`GATE`: a
+detection farther than that from every object is a false positive, whatever its label, and an
+object with none that close is missed.  The distance is 3-D so that a block standing at a zone's
+centre, or on another block, is matched to itself and not to what lies under it.  Kind, colour and size are then compared on the matches
+only, so a confusion never hides as a miss.
+
+Yaw errors respect symmetry: a square (block, zone) repeats every 90°, a fixture every 360°,
+and round objects (bowls, balls) have no yaw and no yaw error.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from capmj.perception.detect import Detection
+
+GATE = 0.02
+"""Largest distance (m) between centres at which a detection can be an object's."""
+_PERIOD = {"block": math.pi / 2, "zone": math.pi / 2, "fixture": 2 * math.pi}
+
+
+@dataclass(frozen=True)
+class TrueObject:
+    """What the truth says of one object (from a world, a snapshot or a test)."""
+
+    kind: str
+    color: str
+    size: str | None
+    position: tuple[float, float, float]
+    yaw: float
+
+
+@dataclass(frozen=True)
+class Match:
+    truth: int
+    detection: int
+    position_error: float
+    """Euclidean (m), 3-D."""
+    xy_error: float
+    yaw_error: float | None
+    """Radians, modulo the kind's symmetry; None for round kinds."""
+    kind_ok: bool
+    color_ok: bool
+    size_ok: bool
+
+
+def yaw_error(kind: str, a: float, b: float) -> float | None:
+    """|a - b| modulo the symmetry of ``kind`` (None when it has no yaw)."""
+    period = _PERIOD.get(kind)
+    if period is None:
+        return None
+    return abs(math.remainder(a - b, period))
+
+
+@dataclass(frozen=True)
+class Score:
+    """The matches of one perception call against its truth."""
+
+    n_true: int
+    n_detected: int
+    matches: tuple[Match, ...]
+    confusions: tuple[tuple[str, str], ...]
+    """(true colour, perceived colour) of every match whose colour is wrong."""
+
+    @property
+    def recall(self) -> float:
+        return len(self.matches) / self.n_true if self.n_true else 1.0
+
+    @property
+    def precision(self) -> float:
+        return len(self.matches) / self.n_detected if self.n_detected else 1.0
+
+    def to_dict(self) -> dict:
+        """JSON-friendly figures of this call (errors in mm and degrees)."""
+        pos = [m.position_error * 1000 for m in self.matches]
+        yaw = [math.degrees(m.yaw_error) for m in self.matches if m.yaw_error is not None]
+        return {"n_true": self.n_true, "n_detected": self.n_detected, "matched": len(self.matches),
+                "recall": self.recall, "precision": self.precision,
+                "kind_errors": sum(not m.kind_ok for m in self.matches),
+                "color_errors": sum(not m.color_ok for m in self.matches),
+                "size_errors": sum(not m.size_ok for m in self.matches),
+                "median_pos_mm": float(np.median(pos)) if pos else None,
+                "max_pos_mm": max(pos) if pos else None,
+                "max_yaw_deg": max(yaw) if yaw else None,
+                "confusions": [list(c) for c in self.confusions]}
+
+
+def score(detections: Sequence[Detection], truths: Sequence[TrueObject], gate: float = GATE) -> Score:
+    """Match ``detections`` to ``truths`` one-to-one (see the module docstring)."""
+    matches: list[Match] = []
+    if detections and truths:
+        d = np.array([det.position for det in detections])
+        t = np.array([tr.position for tr in truths])
+        cost = np.linalg.norm(t[:, None, :] - d[None, :, :], axis=-1)
+        rows, cols = linear_sum_assignment(np.where(cost <= gate, cost, 1e3))
+        for i, j in zip(rows, cols):
+            if cost[i, j] > gate:
+                continue
+            tr, det = truths[i], detections[j]
+            matches.append(Match(
+                truth=int(i), detection=int(j),
+                position_error=float(np.linalg.norm(np.subtract(det.position, tr.position))),
+                xy_error=float(np.linalg.norm(t[i, :2] - d[j, :2])),
+                yaw_error=yaw_error(tr.kind, det.yaw, tr.yaw) if det.kind == tr.kind else None,
+                kind_ok=det.kind == tr.kind, color_ok=det.color == tr.color,
+                size_ok=det.size == tr.size))
+    confusions = tuple((truths[m.truth].color, detections[m.detection].color) for m in matches if not m.color_ok)
+    return Score(len(truths), len(detections), tuple(matches), confusions)
+
+
+__all__ = ["GATE", "Match", "Score", "TrueObject", "score", "yaw_error"]

@@ -1,0 +1,231 @@
+"""The perception layer: isolation from the simulator, footprint geometry, detections vs the truth.
+
+Only these tests (and ``benchmarks/perception.py``) read the ground truth; the perceiver never
+does.  The isolation tests run the perceiver on images saved to disk in a fresh interpreter that
+imports no world and no MuJoCo, so a leak of simulator state into ``capmj.perception`` fails here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from capmj.perception import ClassicalPerceiver, RGBDBundle
+from capmj.perception.footprint import fit_l, min_area_rect, square_yaw
+from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def _render(objects) -> tuple[RGBDBundle, list]:
+    """The three views of a settled world and its true objects (poses read after settling)."""
+    from capmj.sim.cameras import CameraRig
+    from capmj.sim.world import World
+
+    world = World(objects)
+    world.settle()
+    with CameraRig(world) as rig:
+        views = rig.render_all(seg=True, heightmap=False).views.values()
+        bundle = RGBDBundle.from_frames(views)
+    truth = [(o, world.pose(o.obj_id)) for o in objects]
+    return bundle, truth
+
+
+def _spawn(task: str, seed: int):
+    from capmj.tasks.protocol import make_scene
+    from capmj.tasks.registry import get_task
+
+    return make_scene(get_task(task), seed).objects
+
+
+def _subprocess_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(SRC), env.get("PYTHONPATH", "")])
+    return env
+
+
+# ---------------------------------------------------------------------- isolation
+def test_package_imports_no_simulator() -> None:
+    code = ("import sys, pkgutil, importlib, capmj.perception as p\n"
+            "for m in pkgutil.iter_modules(p.__path__): importlib.import_module('capmj.perception.' + m.name)\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m in "
+            "('capmj.sim.world', 'capmj.sim.cameras', 'capmj.sim.scene', 'capmj.tasks', 'capmj.agents'))\n"
+            "print(bad)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_subprocess_env(),
+                         check=True, timeout=120)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_bundle_carries_no_segmentation_and_round_trips(tmp_path: Path) -> None:
+    bundle, _ = _render(_spawn("put-block-into-matching-bowl", 10001))
+    for view in bundle.views:
+        assert set(vars(view)) == {"name", "rgb", "depth", "intrinsics", "extrinsics"}
+    back = RGBDBundle.load(bundle.save(tmp_path / "scene.npz"))
+    assert [v.name for v in back.views] == [v.name for v in bundle.views] == ["front", "left", "right"]
+    for a, b in zip(bundle.views, back.views):
+        assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
+        assert np.array_equal(a.intrinsics, b.intrinsics) and np.array_equal(a.extrinsics, b.extrinsics)
+
+
+def test_perceiver_on_saved_images_in_a_process_without_a_world(tmp_path: Path) -> None:
+    """Images on disk -> a fresh interpreter with no world -> the same detections as in-process,
+    and every true object found there with its kind and colour."""
+    bundle, truth = _render(_spawn("stack-blocks-of-same-color", 10003))
+    path = bundle.save(tmp_path / "scene.npz")
+    code = ("import json, sys\n"
+            "from capmj.perception import ClassicalPerceiver, RGBDBundle\n"
+            f"dets = ClassicalPerceiver().perceive(RGBDBundle.load({str(path)!r}))\n"
+            "assert 'mujoco' not in sys.modules and 'capmj.sim.world' not in sys.modules\n"
+            "print(json.dumps([[d.kind, d.color, d.size, list(d.position)] for d in dets]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_subprocess_env(),
+                         check=True, timeout=300)
+    remote = json.loads(out.stdout)
+    local = [[d.kind, d.color, d.size, list(d.position)] for d in ClassicalPerceiver().perceive(bundle)]
+    assert remote == local  # deterministic across processes
+    assert len(remote) == len(truth)
+    for spec, pose in truth:
+        near = min(remote, key=lambda d: math.dist(d[3][:2], pose.pos[:2]))
+        assert (near[0], near[1], near[2]) == (spec.kind, spec.color, spec.size), spec.name
+        assert math.dist(near[3][:2], pose.pos[:2]) < 0.01, spec.name
+
+
+# ---------------------------------------------------------------------- footprint geometry
+def _rect_points(cx: float, cy: float, length: float, width: float, angle: float, step: float) -> np.ndarray:
+    u, v = np.meshgrid(np.arange(-length / 2, length / 2 + 1e-9, step), np.arange(-width / 2, width / 2 + 1e-9, step))
+    c, s = math.cos(angle), math.sin(angle)
+    return np.stack([cx + c * u.ravel() - s * v.ravel(), cy + s * u.ravel() + c * v.ravel()], axis=1)
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, -1.2, 1.5])
+def test_min_area_rect_recovers_a_rotated_rectangle(angle: float) -> None:
+    r = min_area_rect(_rect_points(0.4, -0.1, 0.1, 0.04, angle, 0.002))
+    assert (r.cx, r.cy) == pytest.approx((0.4, -0.1), abs=1e-6)
+    assert (r.length, r.width) == pytest.approx((0.1, 0.04), abs=1e-6)
+    assert math.remainder(r.angle - angle, math.pi) == pytest.approx(0.0, abs=1e-6)
+    square = min_area_rect(_rect_points(0.0, 0.0, 0.04, 0.04, angle, 0.002))
+    assert math.remainder(square_yaw(square) - angle, math.pi / 2) == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.8, 2.5, -2.0])
+def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
+    # The walls of mjcf/fixture.xml in the fixture's frame, then turned by yaw about the origin (0.5, 0.1).
+    long_wall = _rect_points(0.02, -0.025, FIXTURE_LONG, FIXTURE_WALL, 0.0, 0.002)
+    short_wall = _rect_points(-0.025, 0.005, FIXTURE_WALL, FIXTURE_SHORT, 0.0, 0.002)
+    local = np.concatenate([long_wall, short_wall])
+    c, s = math.cos(yaw), math.sin(yaw)
+    xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
+    fit = fit_l(xy, min_area_rect(xy), 0.002)
+    assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
+    assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
+    assert fit.mismatch < 0.05
+
+
+# ---------------------------------------------------------------------- accuracy against the truth
+def _truths(truth) -> list:
+    from capmj.perception.score import TrueObject
+
+    return [TrueObject(o.kind, o.color, o.size, pose.pos, pose.yaw) for o, pose in truth]
+
+
+@pytest.mark.parametrize("task,seed", [("stack-blocks-by-color-and-size", 10005),
+                                       ("put-block-into-mismatching-bowl", 10007),
+                                       ("construct-circle-ball-middle", 10009)])
+def test_spawn_scene_detected_exactly(task: str, seed: int) -> None:
+    from capmj.perception.score import score
+
+    bundle, truth = _render(_spawn(task, seed))
+    s = score(ClassicalPerceiver().perceive(bundle), _truths(truth))
+    assert (s.recall, s.precision) == (1.0, 1.0), s.to_dict()
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches), s.to_dict()
+    assert max(m.position_error for m in s.matches) < 0.005, s.to_dict()
+    assert max(m.yaw_error or 0.0 for m in s.matches) < math.radians(8), s.to_dict()
+
+
+def test_block_on_a_zone_of_its_own_colour_is_its_own_object() -> None:
+    from capmj.perception.score import score
+    from capmj.sim.objects import ObjectSpec
+
+    objects = [ObjectSpec(1, "zone", "red", (0.5, 0.1, 0.0005), 0.4),
+               ObjectSpec(2, "block", "red", (0.52, 0.09, 0.02), 0.1, "small"),
+               ObjectSpec(3, "zone", "gray", (0.45, -0.2, 0.0005), -0.2, scale=1.5),
+               ObjectSpec(4, "block", "silver", (0.45, -0.2, 0.01), 0.7, "tiny")]
+    bundle, truth = _render(objects)
+    dets = ClassicalPerceiver().perceive(bundle)
+    s = score(dets, _truths(truth))
+    assert (s.recall, s.precision) == (1.0, 1.0), s.to_dict()
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches), s.to_dict()
+    gray = next(d for d in dets if d.kind == "zone" and d.color == "gray")
+    assert gray.scale == pytest.approx(1.5, abs=0.05)
+
+
+def test_score_gates_and_counts_confusions() -> None:
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("block", "red", "small", (0.5, 0.0, 0.02), 0.1),
+              TrueObject("block", "blue", "small", (0.4, 0.0, 0.02), 0.0)]
+    dets = [Detection("block", "pink", "small", 1.0, (0.505, 0.0, 0.02), 0.1 + math.pi / 2, box, 0.9),
+            Detection("block", "blue", "big", 1.0, (0.4, 0.05, 0.02), 0.0, box, 0.9)]  # 5 cm off: no match
+    s = score(dets, truths)
+    assert (s.recall, s.precision) == (0.5, 0.5)
+    assert s.confusions == (("red", "pink"),)
+    assert s.matches[0].yaw_error == pytest.approx(0.0, abs=1e-9)  # a square repeats every 90 degrees
+
+
+# ---------------------------------------------------------------------- names and tracking
+def _block(color: str, x: float, y: float, z: float, size: str = "small"):
+    from capmj.perception.detect import Detection
+    from capmj.sim.objects import BLOCK_SIZES
+
+    h = BLOCK_SIZES[size] / 2
+    return Detection("block", color, size, 1.0, (x, y, z), 0.0, ((x - h, y - h, z - h), (x + h, y + h, z + h)), 0.9)
+
+
+def test_object_names_are_todays_format() -> None:
+    from capmj.perception.track import object_name
+    from capmj.tasks.builtin import BENCHMARK_TASKS, GENERATED_TASKS
+
+    for task in BENCHMARK_TASKS + GENERATED_TASKS:
+        for o in _spawn(task, 10001):
+            assert object_name(o.kind, o.color, o.size, o.obj_id) == o.name
+
+
+def test_a_tower_of_five_keeps_all_five_names() -> None:
+    from capmj.perception.track import Tracker
+
+    colours = ["red", "blue", "green", "yellow", "pink"]
+    table = [_block(c, 0.3 + 0.08 * k, 0.2, 0.02) for k, c in enumerate(colours)]
+    tracker = Tracker.start(table)
+    names = tracker.names
+    assert [t.obj_id for t in tracker.objects] == [1, 2, 3, 4, 5]
+    base = (0.5, -0.2)
+    ids = {t.detection.color: t.obj_id for t in tracker.objects}
+    for level, colour in enumerate(colours):
+        # The robot puts `colour` on the tower; the cameras see the tower's top and the table.
+        top = (base[0], base[1], 0.02 + 0.04 * level)
+        seen = [_block(colour, *top)] + [d for d in table[level + 1:]]
+        tracker = tracker.update(seen, moved={ids[colour]: top})
+        assert tracker.names == names  # every block keeps its name, hidden ones included
+    hidden = [t.detection.color for t in tracker.objects if not t.visible]
+    assert sorted(hidden) == sorted(colours[:-1])
+    # Taking the top block away (to the table) leaves the rest of the tower remembered.
+    tracker = tracker.update([_block("yellow", base[0], base[1], 0.14), _block("pink", 0.7, 0.3, 0.02)],
+                             moved={ids["pink"]: (0.7, 0.3, 0.02)})
+    assert tracker.names == names
+    assert {t.detection.color for t in tracker.objects if t.visible} == {"yellow", "pink"}
+
+
+def test_a_block_that_vanishes_is_dropped_and_new_ones_get_fresh_ids() -> None:
+    from capmj.perception.track import Tracker
+
+    tracker = Tracker.start([_block("red", 0.4, 0.0, 0.02), _block("blue", 0.6, 0.0, 0.02)])
+    tracker = tracker.update([_block("red", 0.401, 0.0, 0.02), _block("gold", 0.5, 0.3, 0.01, "tiny")])
+    assert tracker.names == ["movable small red block with obj_id 1", "movable tiny gold block with obj_id 3"]
