@@ -184,3 +184,5 @@ def test_reporter_in_zone_is_the_tasks_rule():
     assert seen == [True, False, False, False, False, True]
     with pytest.raises(ValueError, match="not a zone"):
         env["in_zone"](names[3], names[4])
+    # CapRavens' checking code reads the poses as object_positions
+    assert env["object_positions"] is env["poses"] and env["object_positions"][names[3]][0] == pytest.approx([0.575, 0.0, 0.02], abs=2e-3)

@@ -6,7 +6,8 @@ helper the example had defined inline and sent ``parse_function`` to invent it. 
 therefore runs its code in an environment that pre-binds everything its examples use, computed
 once from the settled scene it judges:
 
-``poses``          ``{name: ([x, y, z], [roll, pitch, yaw])}`` (= ``get_obj_pos_dict()``)
+``poses``          ``{name: ([x, y, z], [roll, pitch, yaw])}`` (= ``get_obj_pos_dict()``); also bound
+                   as ``object_positions``, the name CapRavens' checking code reads it under
 ``sizes``          ``{block name: edge length (m)}``
 ``blocks``, ``zones``, ``bowls``   object names by kind, in scene order
 ``goal_objects``   ``{'orange zone': 'fixed orange zone with obj_id 1', ...}``: every
@@ -36,7 +37,7 @@ from capmj.tasks.predicates import in_square
 
 __all__ = ["PREBOUND", "goal_objects", "reporter_env"]
 
-PREBOUND = ("poses", "sizes", "blocks", "zones", "bowls", "goal_objects", "size", "upright", "in_zone",
+PREBOUND = ("poses", "object_positions", "sizes", "blocks", "zones", "bowls", "goal_objects", "size", "upright", "in_zone",
             "in_bowl", "on_top")
 """Names the reporter's code may use without defining them (listed in the repair request), besides
 the ``<colour>_<kind>`` variables of the goal's named objects."""
@@ -107,6 +108,7 @@ def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], 
                            if phrase.replace(" ", "_").isidentifier()}
     env.update({
         "poses": poses,
+        "object_positions": poses,
         "sizes": sizes,
         "blocks": [n for n in poses if kinds.get(n) == "block"],
         "zones": [n for n in poses if kinds.get(n) == "zone"],
