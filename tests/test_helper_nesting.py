@@ -26,7 +26,7 @@ ANSWERS = {
 }
 
 
-def fake_llm(messages, purpose=""):
+def fake_llm(messages, purpose="", stop=()):
     query = [ln for ln in messages[-1]["content"].splitlines() if ln.startswith("# ")][-1][2:].rstrip(".")
     return SimpleNamespace(text=f"```python\n{ANSWERS[query]}```", cached=False)
 
