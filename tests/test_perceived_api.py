@@ -1,0 +1,47 @@
+"""The planner API in rgbd mode: answered from the cameras, re-perceived after every move."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+from capmj.agents.base import EpisodeContext
+from capmj.agents.perceived import PerceivedAPI, make_api
+from capmj.agents.reference import ReferenceAgent
+from capmj.runner import run_episode
+from capmj.sim.world import World
+from capmj.tasks.protocol import make_scene
+from capmj.tasks.registry import get_task
+
+
+def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_move() -> None:
+    task = get_task("stack-blocks-of-same-color")
+    scene = make_scene(task, 10003)
+    world = World(scene.objects)
+    world.settle()
+    api = PerceivedAPI(EpisodeContext(task, 10003, scene, world))
+    fns = api.functions()
+    names = fns["get_obj_names"]()
+    truth = Counter(o.name.rsplit(" with obj_id", 1)[0] for o in scene.objects)
+    assert Counter(n.rsplit(" with obj_id", 1)[0] for n in names) == truth
+    assert api.scene.calls == 1
+    blocks = [n for n in names if n.startswith("movable")]
+    zone = next(n for n in names if "zone" in n)
+    fns["put_first_on_second"](blocks[0], zone)
+    fns["put_first_on_second"](blocks[1], blocks[0])
+    assert api.scene.calls == 3
+    assert fns["get_obj_names"]() == names  # the lower block, now under another, keeps its name
+    lo, hi = fns["get_bbox"](blocks[1])[2], fns["get_bbox"](blocks[0])[5]
+    assert lo == pytest.approx(hi, abs=0.004)  # the upper block is perceived resting on the lower one
+
+
+@pytest.mark.parametrize("task", ["put-block-into-mismatching-bowl", "stack-all-blocks-on-a-zone"])
+def test_reference_plan_succeeds_in_rgbd_mode(task: str) -> None:
+    r = run_episode(get_task(task), 10005, ReferenceAgent(perception="rgbd"))
+    assert r.success, (r.error, r.diagnostics)
+
+
+def test_unknown_perception_mode_is_refused() -> None:
+    with pytest.raises(ValueError, match="valid modes: state, rgbd"):
+        make_api(None, "lidar")  # type: ignore[arg-type]
