@@ -367,3 +367,12 @@ def test_object_boxes_bound_every_geom_of_each_object_tightly() -> None:
         np.testing.assert_allclose(pts.min(axis=0), lo[k], atol=1e-12)
         np.testing.assert_allclose(pts.max(axis=0), hi[k], atol=1e-12)
     assert np.array_equal(w.aabb(2)[1], hi[1]) and w.top_z(1) == hi[0, 2]
+
+
+def test_pose_quat_xyzw_reorders_mujocos_quaternion_and_the_old_name_warns() -> None:
+    from capmj.sim.state import Pose
+
+    p = Pose((0.0, 0.0, 0.0), (0.5, 0.1, 0.2, 0.3))  # w, x, y, z as in MuJoCo
+    assert p.quat_xyzw == (0.1, 0.2, 0.3, 0.5)
+    with pytest.warns(DeprecationWarning, match="quat_xyzw"):
+        assert p.xquat == p.quat_xyzw

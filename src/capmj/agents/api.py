@@ -175,8 +175,8 @@ class PlannerAPI:
     def _pos(self, oid: int) -> np.ndarray:
         return np.asarray(self._world.pose(oid).pos, float)
 
-    def _xquat(self, oid: int) -> list[float]:
-        return [float(v) for v in self._world.pose(oid).xquat]
+    def _quat_xyzw(self, oid: int) -> list[float]:
+        return [float(v) for v in self._world.pose(oid).quat_xyzw]
 
     # ================================================================== logging
     def _logged(self, name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -373,7 +373,7 @@ class PlanFunctions:
         Objects start at random yaws (about z); an upright object's yaw is 2 atan2(z, w)."""
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_rot(o) for o in obj]
-        return self._api._xquat(self._api._resolve(obj).obj_id)
+        return self._api._quat_xyzw(self._api._resolve(obj).obj_id)
 
     def get_bbox(self, obj):
         """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out.
@@ -394,7 +394,7 @@ class PlanFunctions:
     def get_obj_pos_dict(self) -> dict[str, tuple[list[float], list[float]]]:
         """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
         api = self._api
-        return {o.name: ([float(v) for v in api._pos(o.obj_id)], quat_euler_xyz(wxyz(api._xquat(o.obj_id))))
+        return {o.name: ([float(v) for v in api._pos(o.obj_id)], quat_euler_xyz(wxyz(api._quat_xyzw(o.obj_id))))
                 for o in api._objects()}
 
     def get_obj_positions_np(self, names) -> np.ndarray:

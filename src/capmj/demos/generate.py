@@ -79,7 +79,7 @@ def _info(env: TabletopEnv) -> dict[str, Any]:
     poses = {}
     for o in w.objects:
         p = w.pose(o.obj_id)
-        poses[o.obj_id] = (tuple(float(v) for v in p.pos), tuple(float(v) for v in p.xquat))
+        poses[o.obj_id] = (tuple(float(v) for v in p.pos), tuple(float(v) for v in p.quat_xyzw))
     return {"lang_goal": env.scene.goal if env.scene else "", "task": env.task.name, "seed": env.seed,
             "step": env.steps, "progress": env.progress, "success": env.success,
             "status": None if res is None else res.status, "poses": poses}

@@ -8,6 +8,7 @@ predicate against near misses without running physics.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Iterator, Mapping, Sequence
 
@@ -50,9 +51,16 @@ class Pose:
         return float(math.acos(min(1.0, float(np.max(np.abs(r[2, :]))))))
 
     @property
-    def xquat(self) -> tuple[float, float, float, float]:
+    def quat_xyzw(self) -> tuple[float, float, float, float]:
         """The same quaternion as (x, y, z, w), the planner API's and rerun's convention."""
         return xyzw(self.quat)
+
+    @property
+    def xquat(self) -> tuple[float, float, float, float]:
+        """Deprecated name of :attr:`quat_xyzw` (it read like MuJoCo's ``data.xquat``, which is w, x, y, z)."""
+        warnings.warn("Pose.xquat is deprecated: use Pose.quat_xyzw (the same x, y, z, w quaternion)",
+                      DeprecationWarning, stacklevel=2)
+        return self.quat_xyzw
 
 
 @dataclass(frozen=True)
