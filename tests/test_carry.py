@@ -29,7 +29,7 @@ def test_far_corner_pick_onto_a_tall_tower_carries_on_a_slope() -> None:
     w = tower_world((0.413, 0.012), 7, (0.695, 0.398))
     p = Primitives(w)
     top = p.transit_height(exclude=8, hang=0.04)
-    assert reach_height(p.motion.ik, w.data.ctrl[:6].copy(), np.array([0.695, 0.398]), 0.0, top, 0.0) < top
+    assert reach_height(p.motion.ik, w.arm_ctrl(), np.array([0.695, 0.398]), 0.0, top, 0.0) < top
     before = {i: np.array(w.pose(i).pos) for i in range(1, 8)}
     res = p.pick_and_place(np.array(w.pose(8).pos), np.array([0.413, 0.012, 0.02 + 0.04 * 7]), 0.0)
     assert res.ok, res.message

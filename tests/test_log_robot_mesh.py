@@ -14,8 +14,8 @@ from capmj.sim.world import World
 def test_link_meshes_are_cached_on_disk_equal_to_computed_and_a_damaged_cache_is_recomputed(
         tmp_path, monkeypatch: pytest.MonkeyPatch) -> None:  # noqa: ANN001
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))
-    m = World(()).model
-    bodies = tuple(m.body(i).name for i in range(1, m.nbody) if m.body(i).name != SUCTION_BODY)
+    m = World(())
+    bodies = tuple(n for n in m.link_names if n != SUCTION_BODY)
     first = robot_mesh._stored_link_meshes(m, bodies, robot_mesh.CLUSTER_M)  # the disk cache, below the memo: computed
     files = list(tmp_path.glob("ur5e-log-links-*.npz"))
     assert len(files) == 1 and first

@@ -208,7 +208,7 @@ def test_straight_line_is_tracked_within_the_path_tolerance_with_few_ik_solves()
         return solve(*a, **k)
 
     motion.ik.solve = counted  # type: ignore[method-assign]
-    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    start = motion.ik.tip_position(w.arm_ctrl())
     end = np.array([0.45, -0.35, 0.12])
     yaw0 = motion.commanded_yaw()
     plan = motion.plan_line(start, end, yaw0, yaw0 + 0.8, motion.cfg.speed)
@@ -229,7 +229,7 @@ def test_segments_end_on_target_without_a_converge_wait() -> None:
     w = World([small(1, "red", 0.5, 0.2)])
     motion = Primitives(w).motion
     target = np.array([0.5, -0.2, 0.25])
-    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    start = motion.ik.tip_position(w.arm_ctrl())
     plan = motion.plan_line(start, target, motion.commanded_yaw(), 0.3, motion.cfg.speed)
     assert plan is not None
     motion.execute(plan)
@@ -279,7 +279,7 @@ def test_guarded_descent_brakes_to_the_approach_speed_where_the_slow_part_begins
     w = World([small(1, "red", 0.5, 0.2)])
     motion = Primitives(w).motion
     cfg = motion.cfg
-    start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+    start = motion.ik.tip_position(w.arm_ctrl())
     yaw = motion.commanded_yaw()
     end, slow = start - np.array([0.0, 0.0, 0.25]), 0.05
     plan = motion.plan_line(start, end, yaw, yaw, cfg.speed, slow_last=slow)
@@ -303,7 +303,7 @@ def test_ik_seeded_with_a_neighbours_offset_lands_within_tolerance() -> None:
     solver's 0.1 mm tolerance) as solving from the analytic solution alone."""
     w = World([small(1, "red", 0.5, 0.2)])
     ik = Primitives(w).motion.ik
-    q0 = w.data.ctrl[:6].copy()
+    q0 = w.arm_ctrl()
     first = ik.solve(np.array([0.4, -0.2, 0.2]), 0.3, q0)
     assert first.q is not None and first.offset is not None
     target = np.array([0.55, -0.05, 0.2])
@@ -324,7 +324,7 @@ def test_a_two_line_move_rounds_its_corner_within_the_blend_radius() -> None:
         tips: list[np.ndarray] = []
         w.add_frame_listener(lambda world: tips.append(world.tip_pose()[0].copy()), 1)
         yaw = motion.commanded_yaw()
-        start = motion.ik.tip_position(w.data.ctrl[:6].copy())
+        start = motion.ik.tip_position(w.arm_ctrl())
         corner, end = start + np.array([0.0, 0.0, 0.1]), start + np.array([0.0, -0.3, 0.1])
         if blended:
             status, steps, _ = motion.move_through([(corner, yaw), (end, yaw)])
@@ -339,7 +339,7 @@ def test_a_two_line_move_rounds_its_corner_within_the_blend_radius() -> None:
     steps, tips = run(True)
     assert steps < separate - 20
     w = World([small(1, "red", 0.5, 0.2)])
-    start = Primitives(w).motion.ik.tip_position(w.data.ctrl[:6].copy())
+    start = Primitives(w).motion.ik.tip_position(w.arm_ctrl())
     corner = start + np.array([0.0, 0.0, 0.1])
     off = [min(np.hypot(p[0] - start[0], p[1] - start[1]),                     # the vertical line
                np.hypot(p[0] - start[0], p[2] - corner[2])) for p in tips]     # the horizontal one

@@ -13,8 +13,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
 from capmj.errors import EvaluationFailed, describe, error_facts
@@ -33,17 +31,14 @@ def _attach_frames(world: World, recorder: Recorder) -> None:
     """Send the recorder every body's pose now and every FRAME_EVERY_STEPS physics steps: the
     objects, then the robot's bodies.  A recorder taking arrays (:class:`ArrayFrames`) gets one
     copy of MuJoCo's pose arrays per frame, the others a dict of tuples."""
-    m = world.model
-    objects = {o.obj_id: o.body for o in world.objects}
-    links = [m.body(i).name for i in range(1, m.nbody) if m.body(i).name not in objects.values()]
-    names = (*objects.values(), *links)
-    ids = np.array([world.body_of[i] for i in objects] + [m.body(n).id for n in links], dtype=np.intp)
+    names = (*(o.body for o in world.objects), *world.link_names)
+    ids = world.body_index(names)
     if isinstance(recorder, ArrayFrames):
         def emit(w: World) -> None:
-            recorder.frame_arrays(w.time, names, w.data.xpos[ids], w.data.xquat[ids])
+            recorder.frame_arrays(w.time, names, *w.body_poses(ids))
     else:
         def emit(w: World) -> None:
-            recorder.frame(w.time, {n: (tuple(p), tuple(q)) for n, p, q in zip(names, w.data.xpos[ids], w.data.xquat[ids])})
+            recorder.frame(w.time, {n: (tuple(p), tuple(q)) for n, p, q in zip(names, *w.body_poses(ids))})
 
     emit(world)
     world.add_frame_listener(emit, FRAME_EVERY_STEPS)

@@ -1,8 +1,9 @@
 """Static 3D geometry of an episode log: the table, the objects' shapes, the robot's meshes.
 
 Everything here is logged once, ``static=True``, in the body frame of its entity; only transforms
-change over time (see :mod:`capmj.log.recorder`).  Shapes come from the compiled MuJoCo model when
-the world is attached (exact), else from the object specs (approximate).
+change over time (see :mod:`capmj.log.recorder`).  Shapes come from the world's geom parts
+(:meth:`capmj.sim.world.World.body_parts`: exact) when the world is attached, else from the object
+specs (approximate).
 """
 
 from __future__ import annotations
@@ -16,12 +17,14 @@ from capmj.sim.pose import xyzw, yaw_quat
 
 if TYPE_CHECKING:
     from capmj.sim.objects import ObjectSpec
+    from capmj.sim.parts import GeomPart
+    from capmj.sim.world import World
 
 GRIP_COLOR = [255, 140, 0]
 """The suction cup's colour while it holds an object (it is the model's dark grey otherwise)."""
 
 
-def u8(rgba: Sequence[float]) -> list[int]:
+def u8(rgba: "Sequence[float] | np.ndarray") -> list[int]:
     return [int(round(255 * max(0.0, min(1.0, float(c))))) for c in rgba]
 
 
@@ -59,28 +62,23 @@ def log_object_specs(rr: Any, rec: Any, objects: Sequence["ObjectSpec"]) -> None
                                     quaternion=rr.Quaternion(xyzw=xyzw(yaw_quat(o.yaw)))))
 
 
-def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None,
-               geom_ids: Sequence[int] | None = None) -> list[Any]:
+def body_geoms(rr: Any, geoms: Sequence["GeomPart"], color: list[int] | None) -> list[Any]:
     """rerun archetypes for the box/cylinder/sphere geoms of one body, in its frame (names are
     not drawn here: :mod:`capmj.log.verdict3d` shows the names that matter)."""
-    import mujoco
-
-    geoms = np.flatnonzero(model.geom_bodyid == body_id) if geom_ids is None else geom_ids
     boxes: dict[str, list] = {"centers": [], "quaternions": [], "half_sizes": [], "colors": []}
     cyls: dict[str, list] = {"centers": [], "quaternions": [], "lengths": [], "radii": [], "colors": []}
     spheres: dict[str, list] = {"centers": [], "half_sizes": [], "colors": []}
     for g in geoms:
-        gtype = int(model.geom_type[g])
-        size = model.geom_size[g]
-        pos, quat = model.geom_pos[g].tolist(), xyzw(model.geom_quat[g])
-        col = color or u8(model.geom_rgba[g])
-        if gtype == mujoco.mjtGeom.mjGEOM_BOX:
+        size = g.size
+        pos, quat = g.pos.tolist(), xyzw(g.quat)
+        col = color or u8(g.rgba)
+        if g.kind == "box":
             for k, v in zip(boxes, (pos, quat, size.tolist(), col)):
                 boxes[k].append(v)
-        elif gtype == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        elif g.kind == "cylinder":
             for k, v in zip(cyls, (pos, quat, 2 * float(size[1]), float(size[0]), col)):
                 cyls[k].append(v)
-        elif gtype == mujoco.mjtGeom.mjGEOM_SPHERE:
+        elif g.kind == "sphere":
             for k, v in zip(spheres, (pos, [float(size[0])] * 3, col)):
                 spheres[k].append(v)
     parts = []
@@ -100,14 +98,13 @@ def body_geoms(rr: Any, model: Any, body_id: int, color: list[int] | None,
     return parts
 
 
-def log_world_objects(rr: Any, rec: Any, world: Any) -> None:
+def log_world_objects(rr: Any, rec: Any, world: "World") -> None:
     """Exact object shapes from the compiled model (specs as fallback for shapeless bodies)."""
     from capmj.sim.palette import rgba
 
-    m = world.model
     missing = []
     for o in world.objects:
-        parts = body_geoms(rr, m, m.body(o.body).id, u8(rgba(o.color)))
+        parts = body_geoms(rr, world.body_parts(o.body), u8(rgba(o.color)))
         if parts:
             rec.log(object_entity(o.body), *parts, static=True)
         else:
@@ -116,15 +113,14 @@ def log_world_objects(rr: Any, rec: Any, world: Any) -> None:
         log_object_specs(rr, rec, missing)
 
 
-def robot_entities(model: Any, links: Sequence[str]) -> dict[str, str]:
+def robot_entities(world: "World", links: Sequence[str]) -> dict[str, str]:
     """Entity path of each robot link.  A link without joints whose parent is another link (the
     suction tool on the wrist) is nested under its parent, so it needs no transform over time."""
     out: dict[str, str] = {}
     for name in links:
-        b = model.body(name)
-        parent = model.body(int(b.parentid[0])).name
-        if int(model.body_jntnum[b.id]) == 0 and parent in out:
-            out[name] = f"{out[parent]}/{name}"
+        link = world.link(name)
+        if link.joints == 0 and link.parent in out:
+            out[name] = f"{out[link.parent]}/{name}"
         else:
             out[name] = f"{ROBOT}/{name}"
     return out
@@ -136,46 +132,36 @@ def cup_entity(entities: Mapping[str, str]) -> str:
     return f"{entities.get(SUCTION_BODY, f'{ROBOT}/{SUCTION_BODY}')}/cup"
 
 
-def log_robot(rr: Any, rec: Any, model: Any, entities: Mapping[str, str]) -> None:
+def log_robot(rr: Any, rec: Any, world: "World", entities: Mapping[str, str]) -> None:
     """The arm's link meshes (static, in link frames), the static transforms of nested links, and
     the suction tool's cylinders.  The cup cylinder goes to its own entity so that its colour can
     change while it grips."""
-    import mujoco
-
     from capmj.log.robot_mesh import cached_link_meshes
-    from capmj.sim.robot import SUCTION_BODY, SUCTION_CUP_GEOM
+    from capmj.sim.robot import SUCTION_BODY
 
     for name, ent in entities.items():
         if ent != f"{ROBOT}/{name}":
-            b = model.body(name)
-            rec.log(ent, rr.Transform3D(translation=b.pos.tolist(), quaternion=rr.Quaternion(xyzw=xyzw(b.quat))),
+            link = world.link(name)
+            rec.log(ent, rr.Transform3D(translation=list(link.pos), quaternion=rr.Quaternion(xyzw=xyzw(link.quat))),
                     static=True)
-    for lm in cached_link_meshes(model, tuple(n for n in entities if n != SUCTION_BODY)):
+    for lm in cached_link_meshes(world, tuple(n for n in entities if n != SUCTION_BODY)):
         rec.log(entities[lm.body], rr.Mesh3D(vertex_positions=lm.vertices, triangle_indices=lm.faces,
                                              vertex_normals=lm.normals, vertex_colors=lm.colors), static=True)
     if SUCTION_BODY not in entities:
         return
-    bid = model.body(SUCTION_BODY).id
-    cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
-    others = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid) if g != cup]
-    parts = body_geoms(rr, model, bid, None, others)
+    others = [g for g in world.body_parts(SUCTION_BODY) if g.geom != world.cup_geom]
+    parts = body_geoms(rr, others, None)
     if parts:
         rec.log(entities[SUCTION_BODY], *parts, static=True)
-    if cup >= 0:  # shape static; colour and label over time (static components would hide them)
-        size = model.geom_size[cup]
-        rec.log(cup_entity(entities), rr.Cylinders3D.from_fields(
-            centers=[model.geom_pos[cup].tolist()], quaternions=[rr.Quaternion(xyzw=xyzw(model.geom_quat[cup]))],
-            lengths=[2 * float(size[1])], radii=[float(size[0])], fill_mode="solid"), static=True)
+    cup = world.geom_part(world.cup_geom)  # shape static; colour and label over time (static components would hide them)
+    rec.log(cup_entity(entities), rr.Cylinders3D.from_fields(
+        centers=[cup.pos.tolist()], quaternions=[rr.Quaternion(xyzw=xyzw(cup.quat))],
+        lengths=[2 * float(cup.size[1])], radii=[float(cup.size[0])], fill_mode="solid"), static=True)
 
 
-def cup_color(rr: Any, rec: Any, model: Any, entities: Mapping[str, str], held: str | None) -> None:
+def cup_color(rr: Any, rec: Any, world: "World", entities: Mapping[str, str], held: str | None) -> None:
     """Colour the cup (and label what it holds) from the current time on."""
-    import mujoco
-
-    from capmj.sim.robot import SUCTION_CUP_GEOM
-
-    cup = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, SUCTION_CUP_GEOM)
-    col = GRIP_COLOR if held else u8(model.geom_rgba[cup])
+    col = GRIP_COLOR if held else u8(world.geom_part(world.cup_geom).rgba)
     rec.log(cup_entity(entities), rr.Cylinders3D.from_fields(
         colors=[col], labels=[f"gripping {held}" if held else "suction cup"], show_labels=bool(held)))
 

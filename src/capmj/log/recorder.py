@@ -132,21 +132,16 @@ class RerunRecorder:
         self._attached = True
         self._objects.update({o.obj_id: o for o in world.objects})
         G.log_world_objects(rr, self.rec, world)
-        for o in world.objects:  # fixed objects never move: one static transform, no rows over time
-            if o.fixed:
-                b = world.body_of[o.obj_id]
-                self._static_bodies.add(o.body)
-                self._sent[o.body] = np.concatenate([world.data.xpos[b], world.data.xquat[b]])
-                self.rec.log(f"{OBJECTS}/{o.body}", rr.Transform3D(
-                    translation=world.data.xpos[b].tolist(), quaternion=rr.Quaternion(xyzw=xyzw(world.data.xquat[b]))),
-                    static=True)
-        m = world.model
-        objs = {o.body for o in world.objects}
-        links = [m.body(i).name for i in range(1, m.nbody) if m.body(i).name and m.body(i).name not in objs]
-        self._links = G.robot_entities(m, links)
-        G.log_robot(rr, self.rec, m, self._links)
+        fixed = [o.body for o in world.objects if o.fixed]  # they never move: one static transform each
+        for body, pos, quat in zip(fixed, *world.body_poses(world.body_index(fixed))):
+            self._static_bodies.add(body)
+            self._sent[body] = np.concatenate([pos, quat])
+            self.rec.log(f"{OBJECTS}/{body}", rr.Transform3D(
+                translation=pos.tolist(), quaternion=rr.Quaternion(xyzw=xyzw(quat))), static=True)
+        self._links = G.robot_entities(world, world.link_names)
+        G.log_robot(rr, self.rec, world, self._links)
         self._stamp(self._clock.now)
-        G.cup_color(rr, self.rec, m, self._links, None)
+        G.cup_color(rr, self.rec, world, self._links, None)
         if self.images:
             self._cameras = SceneCameras(world, self.cameras)
             self._log_images("initial")
@@ -172,7 +167,7 @@ class RerunRecorder:
                 if held != self._held:
                     self._held = held
                     self._stamp(t, label)
-                    G.cup_color(self._rr, self.rec, self._world.model, self._links, held)
+                    G.cup_color(self._rr, self.rec, self._world, self._links, held)
         if len(self._poses) >= _FLUSH_FRAMES:
             self._flush_frames()
 

@@ -1,7 +1,7 @@
 """The UR5e's visual meshes for episode logs: one coarse, coloured triangle mesh per link.
 
-The meshes are the world's visual meshes as MuJoCo compiled them (``model.mesh_vert`` /
-``mesh_face``, visual geoms of group 2; already the light copies of :mod:`capmj.sim.visual_mesh`), moved into their body frame with the geom's pose, so a
+The meshes are the world's visual meshes as MuJoCo compiled them (:meth:`capmj.sim.world.World.mesh`
+of the visual geoms, group 2; already the light copies of :mod:`capmj.sim.visual_mesh`), moved into their body frame with the geom's pose, so a
 link mesh is drawn correctly by the link's world transform alone.  Each link's mesh is welded and
 simplified in two steps, per visual geom (so colour boundaries stay sharp): vertex clustering on a
 fine grid closes the seams that stop an edge-collapse simplifier, then ``trimesh``'s quadric
@@ -20,12 +20,16 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
 from capmj.sim.pose import quat_to_mat
 from capmj.sim.visual_mesh import cached_arrays, simplify
+
+if TYPE_CHECKING:
+    from capmj.sim.parts import GeomPart as Part
+    from capmj.sim.world import World
 
 VISUAL_GROUP = 2
 """MuJoCo geom group of the Menagerie arm's visual (non-colliding) meshes."""
@@ -49,20 +53,15 @@ class LinkMesh:
     colors: np.ndarray        # (V, 4) uint8 RGBA
 
 
-def _geom_part(model: Any, g: int) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (body frame) and faces of mesh geom ``g``."""
-    mid = int(model.geom_dataid[g])
-    va, vn = int(model.mesh_vertadr[mid]), int(model.mesh_vertnum[mid])
-    fa, fn = int(model.mesh_faceadr[mid]), int(model.mesh_facenum[mid])
-    v = np.asarray(model.mesh_vert[va:va + vn], dtype=np.float64)
-    f = np.asarray(model.mesh_face[fa:fa + fn], dtype=np.int64)
-    v = v @ quat_to_mat(model.geom_quat[g]).T + np.asarray(model.geom_pos[g])
-    return v, f
+def _geom_part(world: "World", g: "Part") -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (body frame) and faces of a mesh geom."""
+    assert g.mesh is not None
+    v, f = world.mesh(g.mesh)
+    return v @ quat_to_mat(g.quat).T + np.asarray(g.pos), f
 
 
-def _geom_rgba(model: Any, g: int) -> np.ndarray:
-    mat = int(model.geom_matid[g])
-    rgba = model.mat_rgba[mat] if mat >= 0 else model.geom_rgba[g]
+def _geom_rgba(g: "Part") -> np.ndarray:
+    rgba = g.material_rgba if g.material_rgba is not None else g.rgba
     return np.clip(np.round(np.asarray(rgba) * 255), 0, 255).astype(np.uint8)
 
 
@@ -70,16 +69,12 @@ GeomPart = tuple[np.ndarray, np.ndarray, np.ndarray]
 """A visual mesh geom's vertices (body frame), faces and RGBA."""
 
 
-def _visual_parts(model: Any, bodies: tuple[str, ...]) -> list[tuple[str, list[GeomPart]]]:
+def _visual_parts(world: "World", bodies: tuple[str, ...]) -> list[tuple[str, list[GeomPart]]]:
     """Each body's visual mesh geoms, as the simplification takes them."""
-    import mujoco
-
     out = []
     for name in bodies:
-        bid = model.body(name).id
-        geoms = [int(g) for g in np.flatnonzero(model.geom_bodyid == bid)
-                 if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == VISUAL_GROUP]
-        out.append((name, [(*_geom_part(model, g), _geom_rgba(model, g)) for g in geoms]))
+        geoms = [g for g in world.body_parts(name) if g.kind == "mesh" and g.group == VISUAL_GROUP]
+        out.append((name, [(*_geom_part(world, g), _geom_rgba(g)) for g in geoms]))
     return out
 
 
@@ -112,9 +107,9 @@ def _link_mesh(body: str, *arrays: np.ndarray) -> LinkMesh:
     return LinkMesh(body, *arrays)
 
 
-def link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
+def link_meshes(world: "World", bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
     """The simplified visual mesh of each body in ``bodies`` that has visual mesh geoms."""
-    return _simplified(_visual_parts(model, bodies), cell)
+    return _simplified(_visual_parts(world, bodies), cell)
 
 
 def _package_version(name: str) -> str:
@@ -139,9 +134,9 @@ def _disk_key(parts: list[tuple[str, list[GeomPart]]], cell: float) -> str:
 _FIELDS = ("vertices", "faces", "normals", "colors")
 
 
-def _stored_link_meshes(model: Any, bodies: tuple[str, ...], cell: float) -> list[LinkMesh]:
+def _stored_link_meshes(world: "World", bodies: tuple[str, ...], cell: float) -> list[LinkMesh]:
     """:func:`link_meshes` from the disk cache, else computed (and stored there)."""
-    parts = _visual_parts(model, bodies)
+    parts = _visual_parts(world, bodies)
 
     def compute() -> dict[str, np.ndarray]:
         meshes = _simplified(parts, cell)
@@ -159,12 +154,12 @@ def _stored_link_meshes(model: Any, bodies: tuple[str, ...], cell: float) -> lis
 _CACHE: dict[tuple[int, int, tuple[str, ...], float], list[LinkMesh]] = {}
 
 
-def cached_link_meshes(model: Any, bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
-    """:func:`link_meshes`, from memory after the first call of a process (every episode's model
+def cached_link_meshes(world: "World", bodies: tuple[str, ...], cell: float = CLUSTER_M) -> list[LinkMesh]:
+    """:func:`link_meshes`, from memory after the first call of a process (every episode's world
     holds the same arm), else from the disk cache, else computed."""
-    key = (int(model.nmeshvert), int(model.nmeshface), tuple(bodies), float(cell))
+    key = (*world.mesh_size, tuple(bodies), float(cell))
     if key not in _CACHE:
-        _CACHE[key] = _stored_link_meshes(model, bodies, cell)
+        _CACHE[key] = _stored_link_meshes(world, bodies, cell)
     return _CACHE[key]
 
 

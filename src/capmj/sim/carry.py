@@ -81,7 +81,7 @@ def sloped_transit(world: World, ik: SuctionIK, a: np.ndarray, b: np.ndarray, ya
     level from there.  A line's height over an object's stretch is lowest at one of the stretch's
     ends, so checking those suffices.
     """
-    q = world.data.ctrl[:6].copy()
+    q = world.arm_ctrl()
     z0 = reach_height(ik, q, a, yaw, top, low)
     z1 = reach_height(ik, q, b, yaw, top, low)
     if z0 is None or z1 is None:

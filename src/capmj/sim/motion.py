@@ -264,7 +264,7 @@ class Motion:
         # Treat wrist rotation as extra path length so pure rotations get time too.
         eff = max(length, cfg.yaw_path_length * abs(yaw1 - yaw0))
         slow = eff * min(1.0, slow_last / length) if slow_last > 0 and length > 0 else 0.0
-        q_prev = self.world.data.ctrl[:6].copy() if q_start is None else q_start
+        q_prev = self.world.arm_ctrl() if q_start is None else q_start
         table = self._line_table(start, end, yaw0, yaw1, q_prev, eff)
         if table is None:
             return None
@@ -352,7 +352,7 @@ class Motion:
         """
         q, vel, acc, _ = self._reference(plan, max_steps)
         stopped, steps = self._track(q, vel, self._inertia_term(acc), stop)
-        self.world.data.ctrl[:6] = self.world.arm_q() if stopped else plan.qs[-1]
+        self.world.set_arm_ctrl(self.world.arm_q() if stopped else plan.qs[-1])
         return stopped, steps
 
     def _blend_steps(self, path_a: np.ndarray, extent_a: float, path_b: np.ndarray, extent_b: float) -> int:
@@ -384,7 +384,7 @@ class Motion:
         The tool pose is unchanged (a full turn), but IK continuity keeps later solutions near
         the current wrist angle, so without this the wrist would creep to its ±2π limit.
         """
-        q = self.world.data.ctrl[:6].copy()
+        q = self.world.arm_ctrl()
         if abs(q[5]) <= np.pi:
             return 0
         goal = q.copy()
@@ -398,7 +398,7 @@ class Motion:
 
     def commanded_yaw(self) -> float:
         """Tool yaw of the currently commanded joints (read from the arm, never remembered)."""
-        self.ik.tip_position(self.world.data.ctrl[:6].copy())
+        self.ik.tip_position(self.world.arm_ctrl())
         rot = self.ik.data.site_xmat[self.ik.site].reshape(3, 3)
         return float(np.arctan2(rot[1, 0], rot[0, 0]))
 
@@ -420,7 +420,7 @@ class Motion:
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
         """
-        q = self.world.data.ctrl[:6].copy()
+        q = self.world.arm_ctrl()
         start, yaw_prev = self.ik.tip_position(q), self.commanded_yaw()
         plans = []
         for k, (pos, yaw) in enumerate(points):
@@ -450,8 +450,8 @@ class Motion:
             ref_t, path = np.concatenate([ref_t, t_b[o:]]), path_b
         stopped, steps = self._track(ref_q, ref_v, ref_t, stop, stop_from)
         if stopped:
-            self.world.data.ctrl[:6] = self.world.arm_q()
+            self.world.set_arm_ctrl(self.world.arm_q())
             return "stopped", steps, -1
-        self.world.data.ctrl[:6] = plans[-1].qs[-1]
+        self.world.set_arm_ctrl(plans[-1].qs[-1])
         stopped, more = self.converge(np.asarray(points[-1][0], float), stop)
         return ("stopped" if stopped else "ok"), steps + more, -1

@@ -80,7 +80,7 @@ class Primitives:
         """
         m = self.motion
         base = m.commanded_yaw()
-        q_near = self.world.data.ctrl[:6].copy()
+        q_near = self.world.arm_ctrl()
         q = m.ik.solve_analytic(pos, base, q_near)
         if q is None:
             return base

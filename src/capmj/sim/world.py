@@ -1,8 +1,12 @@
 """The live MuJoCo world of one episode: model, data, suction, object poses, reset.
 
-``World`` owns the only ``MjModel``/``MjData`` pair of an episode.  Higher layers read object poses
-through :meth:`World.state` snapshots and act through the motion primitives; the planner never sees
-this class (it gets the API facade in ``capmj.agents``).
+``World`` owns the only ``MjModel``/``MjData`` pair of an episode, and it is the only door to them
+above ``sim/``: higher layers read object poses through :meth:`World.state` snapshots, body poses,
+geom parts, robot links and meshes through the read methods below (plain arrays and the frozen
+records of :mod:`capmj.sim.parts`), and act through the motion primitives.  ``model`` and ``data``
+stay public for ``sim/`` itself, tests and benchmarks; ``tests/test_layers.py`` keeps the package
+above ``sim/`` off them.  The planner never sees this class (it gets the API facade in
+``capmj.agents``).
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from typing import Callable, Mapping, Sequence
 import mujoco
 import numpy as np
 
+from capmj.sim import parts
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.robot import ARM_JOINTS, HOME_QPOS, SUCTION_BODY, SUCTION_CUP_GEOM, SUCTION_TIP_SITE
 from capmj.sim.scene import compile_scene
@@ -20,6 +25,9 @@ from capmj.sim.state import Pose, SceneState
 from capmj.sim.suction import Suction, contact_owners
 
 FrameListener = Callable[["World"], None]
+
+ARM_CTRL = slice(0, len(ARM_JOINTS))
+"""The arm's six servo references in ``data.ctrl`` (the suction weld is an equality, not an actuator)."""
 
 _NEVER = 2**62
 """A step count no episode reaches: when no frame listener is due."""
@@ -87,10 +95,19 @@ class World:
         """Teleport the arm (initialisation only) and hold it there with the servos."""
         self.data.qpos[self.arm_qpos] = q
         self.data.qvel[self.arm_dof] = 0.0
-        self.data.ctrl[:6] = q
+        self.set_arm_ctrl(q)
 
     def arm_q(self) -> np.ndarray:
         return self.data.qpos[self.arm_qpos].copy()
+
+    def arm_ctrl(self) -> np.ndarray:
+        """A copy of the arm's servo references (where the servos hold it, not where it is)."""
+        return self.data.ctrl[ARM_CTRL].copy()
+
+    def set_arm_ctrl(self, q: np.ndarray) -> None:
+        """Set the arm's six servo references: the one place they are written, but for the tight
+        loop of :meth:`step_controls`."""
+        self.data.ctrl[ARM_CTRL] = q
 
     def step(self, n: int = 1) -> None:
         """Advance physics ``n`` steps, notifying frame listeners at their own stride."""
@@ -118,12 +135,12 @@ class World:
         """One physics step per row of ``ctrl`` (the arm's six servo references); stops after the
         step on which ``stop()`` turns true.  Returns (steps taken, stopped).
 
-        The same steps as ``data.ctrl[:6] = row; step()`` per row, in one tight loop: motion
+        The same steps as ``set_arm_ctrl(row); step()`` per row, in one tight loop: motion
         tracking spends most of an episode here, and the per-step Python work is what it costs
-        beyond the physics.
+        beyond the physics (so it writes through a view, not the setter).
         """
         m, d, mj_step = self.model, self.data, mujoco.mj_step
-        arm = d.ctrl[:6]
+        arm = d.ctrl[ARM_CTRL]
         steps = 0
         for row in ctrl:
             arm[:] = row
@@ -166,6 +183,41 @@ class World:
     def pose(self, obj_id: int) -> Pose:
         b = self.body_of[obj_id]
         return Pose.of(self.data.xpos[b], self.data.xquat[b])
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """The robot's bodies (every body but the world body and the objects), in model order."""
+        m, objects = self.model, {o.body for o in self.objects}
+        return tuple(n for n in (m.body(i).name for i in range(1, m.nbody)) if n and n not in objects)
+
+    def body_index(self, names: Sequence[str]) -> np.ndarray:
+        """Body ids of named bodies (objects' ``body`` names or links), for :meth:`body_poses`."""
+        return np.array([self.model.body(n).id for n in names], dtype=np.intp)
+
+    def body_poses(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World positions (n, 3) and orientations (n, 4; w, x, y, z) of bodies by id, now (copies)."""
+        return self.data.xpos[ids], self.data.xquat[ids]
+
+    def body_parts(self, body: str) -> tuple[parts.GeomPart, ...]:
+        """The geoms of a body (an object's ``body`` name or a link), in the body's frame."""
+        return parts.body_parts(self.model, self.model.body(body).id)
+
+    def geom_part(self, geom: int) -> parts.GeomPart:
+        """One geom by id (e.g. ``cup_geom``), in its body's frame."""
+        return parts.geom_part(self.model, geom)
+
+    def link(self, name: str) -> parts.Link:
+        """A robot body's parent, joint count and pose in its parent."""
+        return parts.link(self.model, name)
+
+    def mesh(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Vertices and triangles of the mesh of a mesh geom (``GeomPart.mesh``)."""
+        return parts.mesh(self.model, index)
+
+    @property
+    def mesh_size(self) -> tuple[int, int]:
+        """Vertices and triangles of all the model's meshes together (a cheap key for mesh caches)."""
+        return int(self.model.nmeshvert), int(self.model.nmeshface)
 
     def state(self) -> SceneState:
         return SceneState(self.objects, {i: self.pose(i) for i in self.objects_by_id}, self.time, self.suction.held)
