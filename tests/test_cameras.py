@@ -183,12 +183,17 @@ def test_visualisation_helpers(frames, rig: CameraRig) -> None:
         to_png(frames["front"].depth)
 
 
-def test_mujoco_gl_default_is_set_by_capmj_sim() -> None:
-    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
-    code = "import os, sys, capmj.sim; print(os.environ.get('MUJOCO_GL'), 'mujoco' in sys.modules)"
+def test_the_backend_is_chosen_when_rendering_starts_not_at_import() -> None:
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
+    code = ("import os, capmj.sim, capmj.sim.cameras as c, capmj.sim.gl as gl\n"
+            "from capmj.sim.world import World\n"
+            "before = repr((os.environ.get('MUJOCO_GL'), gl.STATE.chosen, gl.STATE.probe_results))\n"
+            "with c.CameraRig(World([]), width=32, height=24) as rig:\n"
+            "    rig.render('front')\n"
+            "print(before, gl.STATE.chosen)\n")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    backend, imported = out.stdout.split()
-    assert backend in ("egl", "osmesa") and imported == "False"
+    before, chosen = out.stdout.rsplit(maxsplit=1)
+    assert before == "(None, None, {})" and chosen in ("egl", "osmesa")
 
 
 def test_no_backend_error_names_packages(monkeypatch: pytest.MonkeyPatch) -> None:

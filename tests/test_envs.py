@@ -5,6 +5,8 @@ Images are tiny here (rendering is slow on llvmpipe); the full-size path is the 
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from typing import Any
 
 import dm_env
@@ -47,8 +49,10 @@ def test_gymnasium_env_checker_passes() -> None:
     gymnasium = pytest.importorskip("gymnasium")
     from gymnasium.utils.env_checker import check_env
 
+    import capmj.envs
     from capmj.envs.gym_env import env_id
 
+    assert env_id("stack-all-blocks-on-a-zone") in capmj.envs.register()
     env = gymnasium.make(env_id("stack-all-blocks-on-a-zone"), render_mode="rgb_array",
                          config=EnvConfig(cameras=("front",), width=32, height=24, robot_meshes=False))
     check_env(env.unwrapped, skip_render_check=True)
@@ -57,6 +61,21 @@ def test_gymnasium_env_checker_passes() -> None:
     assert info["seed"] == 7 and obs["color"].shape == (1, 24, 32, 3)
     assert np.array_equal(env.render(), obs["color"][0])
     env.close()
+
+
+def test_gymnasium_ids_are_registered_on_request_or_by_the_module_id_form() -> None:
+    """Importing the wrapper registers nothing; ``register()`` does; so does Gymnasium's
+    ``"module:env-id"`` form through :mod:`capmj.envs.gym_ids`, in a fresh process."""
+    pytest.importorskip("gymnasium")
+    code = ("import gymnasium, capmj.envs, capmj.envs.gym_env\n"
+            "ID = 'capmj/stack-all-blocks-on-a-zone-v0'\n"
+            "before = ID in gymnasium.registry\n"
+            "env = gymnasium.make('capmj.envs.gym_ids:' + ID, config=capmj.envs.EnvConfig(cameras=('front',), "
+            "width=16, height=12, robot_meshes=False))\n"
+            "print(before, ID in gymnasium.registry, type(env.unwrapped).__name__)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["False", "True", "TabletopGymEnv"]
 
 
 class _KeepWorld:

@@ -71,3 +71,9 @@ def test_cli_unknown_task_is_exit_2():
     r = subprocess.run([sys.executable, "-m", "capmj.tasks", "check", "no-such-task"], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 2 and "unknown task or tag 'no-such-task'" in r.stderr
+
+
+def test_every_check_has_its_runner_in_the_published_order() -> None:
+    from capmj.taskcheck import checks
+
+    assert tuple(checks._RUNNERS) == CHECKS

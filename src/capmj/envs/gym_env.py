@@ -1,12 +1,16 @@
 """Gymnasium view of :class:`TabletopEnv` (``pip install capmj[gym]``).
 
-Importing this module registers one id per installed task, ``capmj/<task>-v0`` (task names come
-from entry-point metadata, no plugin is imported), so either::
+:func:`register_all` (also ``capmj.envs.register()``) registers one id per installed task,
+``capmj/<task>-v0`` (task names come from entry-point metadata, no plugin is imported); importing
+this module registers nothing.  So either::
 
-    import capmj.envs.gym_env  # noqa: F401
+    import capmj.envs
+    capmj.envs.register()
     env = gymnasium.make("capmj/stack-all-blocks-on-a-zone-v0", config=EnvConfig(width=160, height=120))
 
-or, without the import, ``gymnasium.make("capmj.envs.gym_env:capmj/stack-all-blocks-on-a-zone-v0")``.
+or, in Gymnasium's ``"module:env-id"`` form, ``gymnasium.make("capmj.envs.gym_ids:capmj/stack-all-blocks-on-a-zone-v0")``
+(:mod:`capmj.envs.gym_ids` is the one module whose import registers: that is what the form asks
+of a module; Gymnasium 1.x has no entry-point mechanism for environment plugins).
 
 Spaces mirror the dm_env specs: a ``Dict`` of ``Box`` (images, depth, proprioception) and ``Text``
 (the goal); the action is ``Dict(pick=Box(4), place=Box(4))`` of ``(x, y, z, yaw)``.
@@ -122,5 +126,3 @@ def register_all() -> list[str]:
         ids.append(eid)
     return ids
 
-
-register_all()

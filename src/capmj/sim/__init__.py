@@ -2,13 +2,7 @@
 
 This layer knows nothing of tasks or LLMs.
 
-Importing this package selects the headless OpenGL default before any ``capmj.sim`` module imports
-mujoco: ``MUJOCO_GL`` is set to ``egl`` when unset (``osmesa`` if only libOSMesa is present); a
-user's own ``MUJOCO_GL`` is kept.  MuJoCo reads the variable only at its first import; if mujoco was
-imported earlier without it (GLFW, no display), the camera rig loads EGL/OSMesa itself when PyOpenGL
-is not yet bound to another platform.  See :mod:`capmj.sim.gl`.
+Importing it (or any capmj module) changes nothing in the process: no ``MUJOCO_GL``, no GL probe.
+The headless OpenGL backend is chosen when rendering starts (:mod:`capmj.sim.gl`): a user's
+``MUJOCO_GL`` as given, else EGL or OSMesa, whichever a short probe finds working.
 """
-
-from capmj.sim.gl import set_default_backend as _set_default_backend
-
-_set_default_backend()  # = os.environ.setdefault("MUJOCO_GL", "egl"), but never to a missing library

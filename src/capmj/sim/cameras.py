@@ -34,19 +34,13 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from capmj.errors import ConfigError, RenderBackendError, SimError
-from capmj.sim.gl import ensure_gl_backend, register_cleanup, shared_gl_context
-from capmj.sim.gl import make_current as gl_make_current
+import mujoco
+import numpy as np
 
-try:  # probe EGL/OSMesa if this module is the first to import mujoco; free if it already is
-    ensure_gl_backend()
-except RenderBackendError:  # importing must not fail: rendering raises it again when attempted
-    pass
-
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-
+from capmj.errors import ConfigError, SimError
 from capmj.sim.bounds import WORKSPACE
+from capmj.sim.gl import make_current as gl_make_current
+from capmj.sim.gl import register_cleanup, shared_gl_context
 from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")

@@ -1,23 +1,24 @@
-"""Headless OpenGL backend selection for MuJoCo rendering (EGL first, then OSMesa).
+"""Headless OpenGL backend selection for MuJoCo rendering (EGL first, then OSMesa), when rendering starts.
 
 MuJoCo's Python bindings pick their OpenGL backend **once, when ``mujoco`` is first imported**, from
 the ``MUJOCO_GL`` environment variable (``egl``, ``osmesa``, ``glfw``...); PyOpenGL likewise fixes
-its platform at its first import.  Nothing can switch the backend afterwards in the same process.
-Worse, a ``MUJOCO_GL`` naming a backend whose library is missing makes ``import mujoco`` itself
-fail (e.g. ``MUJOCO_GL=osmesa`` without ``libosmesa6`` raises ``AttributeError`` at import), which
-would break even the non-rendering oracle.  Hence two steps:
+its platform at its first import.  A ``MUJOCO_GL`` naming a backend whose library is missing makes
+``import mujoco`` itself fail (e.g. ``MUJOCO_GL=osmesa`` without ``libosmesa6``).
 
-1. :func:`set_default_backend` runs when ``capmj.sim`` is imported (from ``capmj/sim/__init__.py``,
-   before any ``capmj.sim`` module imports mujoco).  If ``MUJOCO_GL`` is unset and mujoco is not yet
-   imported it sets ``MUJOCO_GL=egl`` -- or ``osmesa`` when only libOSMesa is loadable -- after a
-   cheap check (``dlopen`` of the library, well under a millisecond, no GL context) so that the
-   default can never make ``import mujoco`` crash.  A user's own ``MUJOCO_GL`` is never touched.
-2. :func:`ensure_gl_backend` is what rendering code calls.  If mujoco is not imported yet and the
-   backend was not chosen by the user, it probes EGL and then OSMesa for real, each in a short
-   subprocess that creates a tiny GL context exactly the way MuJoCo does (~0.3 s once per process),
-   and sets ``MUJOCO_GL`` to the first that works.  If mujoco is already imported, the backend is
-   whatever ``MUJOCO_GL`` said at import time; it is reported as is and verified when the shared
-   context is created by :func:`shared_gl_context`.
+Nothing here runs at import: importing capmj sets no variable and starts no probe (the default
+used to be set when ``capmj.sim`` was imported, so that merely importing the simulator changed the
+process's environment).  The backend is settled when rendering starts, by :func:`shared_gl_context`
+(the first :class:`~capmj.sim.cameras.CameraRig`) through :func:`ensure_gl_backend`:
+
+- a ``MUJOCO_GL`` the user set is used as given, and verified when the context is created;
+- otherwise, if mujoco is not imported yet (a script may call :func:`ensure_gl_backend` first, as
+  ``benchmarks/render.py`` does), EGL and then OSMesa are probed, each in a short subprocess that
+  creates a tiny GL context exactly the way MuJoCo does, and ``MUJOCO_GL`` is set to the first that
+  works;
+- if mujoco was imported without ``MUJOCO_GL`` (the usual case: the world imports it), it chose GLFW;
+  with a display that is used, and a headless process gets ``mujoco.egl``/``mujoco.osmesa`` loaded
+  directly after the same probe (:func:`_resolve_imported`).  Setting ``MUJOCO_GL=egl`` before
+  mujoco is imported skips the probe (one subprocess, ~1 s, once per process).
 
 Every failure raises :class:`~capmj.errors.RenderBackendError` naming the apt packages and the
 ``MUJOCO_GL`` values.  One GL context is shared by the whole process (creating one costs 0.2-1 s);
@@ -64,8 +65,6 @@ _PROBE_TIMEOUT_S = 60.0
 class GLState:
     """Everything this module remembers in a process (one instance, :data:`STATE`)."""
 
-    defaulted_by_capmj: bool = False
-    """``MUJOCO_GL`` was set by :func:`set_default_backend`, not by the user."""
     chosen: str | None = None
     """The backend :func:`ensure_gl_backend` settled on."""
     probe_results: dict[str, tuple[bool, str]] = field(default_factory=dict)
@@ -88,23 +87,6 @@ def library_loadable(backend: str) -> bool:
         except OSError:
             continue
     return False
-
-
-def set_default_backend() -> str | None:
-    """Set ``MUJOCO_GL`` if it is unset and mujoco is not imported yet; returns the value in force.
-
-    Called from ``capmj/sim/__init__.py``.  Prefers ``egl``; uses ``osmesa`` only when libEGL cannot
-    be loaded but libOSMesa can; leaves the variable unset when neither loads (``import mujoco``
-    then still works and rendering fails later with a :class:`RenderBackendError`).
-    """
-    if "MUJOCO_GL" in os.environ or "mujoco" in sys.modules:
-        return os.environ.get("MUJOCO_GL")
-    for backend in BACKENDS:
-        if library_loadable(backend):
-            os.environ["MUJOCO_GL"] = backend
-            STATE.defaulted_by_capmj = True
-            return backend
-    return None
 
 
 def probe_backend(backend: str) -> tuple[bool, str]:
@@ -181,16 +163,15 @@ def _resolve_imported() -> tuple[str, Any]:
     raise RenderBackendError(
         f"mujoco was imported with MUJOCO_GL={at_import!r} ({backend or 'no'} GL backend), which needs a "
         f"display, and no headless backend could be loaded afterwards ({'; '.join(reasons)}). Set "
-        "MUJOCO_GL=egl or MUJOCO_GL=osmesa before mujoco is first imported (importing capmj.sim first "
-        f"does it); if neither works, {INSTALL_HINT}")
+        f"MUJOCO_GL=egl or MUJOCO_GL=osmesa before mujoco is first imported; if neither works, {INSTALL_HINT}")
 
 
 def ensure_gl_backend() -> str:
     """Make sure a headless GL backend is selected; return its name (``"egl"``/``"osmesa"``...).
 
-    Call it before mujoco is imported by anything that renders.  If mujoco is not imported yet and
-    ``MUJOCO_GL`` was not set by the user, EGL then OSMesa are probed and ``MUJOCO_GL`` is set to
-    the first that works.  If mujoco is already imported, its backend is fixed: the one chosen at
+    Rendering calls it when it starts; a script may call it before anything imports mujoco.  If
+    mujoco is not imported yet and ``MUJOCO_GL`` is unset, EGL then OSMesa are probed and
+    ``MUJOCO_GL`` is set to the first that works.  If mujoco is already imported, its backend is fixed: the one chosen at
     import is used, except that a headless process whose mujoco fell back to GLFW gets EGL/OSMesa
     loaded directly (see :func:`_resolve_imported`).  Raises :class:`RenderBackendError` when no
     backend can work.
@@ -201,7 +182,7 @@ def ensure_gl_backend() -> str:
         STATE.chosen = _resolve_imported()[0]
         return STATE.chosen
     requested = os.environ.get("MUJOCO_GL", "").strip().lower()
-    if requested and not STATE.defaulted_by_capmj:
+    if requested:
         STATE.chosen = requested  # the user's explicit choice; verified when the context is created
         return requested
     reasons = []
