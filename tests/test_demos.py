@@ -12,7 +12,7 @@ import pytest
 
 from capmj.demos import episodes, load, split_seeds
 from capmj.demos.cli import main
-from capmj.demos.generate import generate_split, make_pool
+from capmj.demos.collect import collect_split, make_pool
 from capmj.envs import EnvConfig
 from capmj.errors import ConfigError
 from capmj.tasks.protocol import make_scene
@@ -37,7 +37,7 @@ def _files(root: Path) -> dict[str, bytes]:
 
 def test_split_round_trips_and_is_byte_identical_across_resume_and_workers(tmp_path: Path) -> None:
     a, b = tmp_path / "a", tmp_path / "b"
-    stats = generate_split(TASK, "test", 2, a, config=TINY)
+    stats = collect_split(TASK, "test", 2, a, config=TINY)
     assert stats.saved == 2 and stats.steps >= 4 and stats.bytes_per_step > 0
     d = a / f"{TASK}-test"
 
@@ -75,10 +75,10 @@ def test_split_round_trips_and_is_byte_identical_across_resume_and_workers(tmp_p
     assert [s.color.size for s in load(d, images=False)][:1] == [0]
 
     # Resume from one episode, finish with two workers: the same bytes.
-    assert generate_split(TASK, "test", 1, b, config=TINY).saved == 1
+    assert collect_split(TASK, "test", 1, b, config=TINY).saved == 1
     pool = make_pool(2)
     try:
-        again = generate_split(TASK, "test", 2, b, config=TINY, workers=2, pool=pool)
+        again = collect_split(TASK, "test", 2, b, config=TINY, workers=2, pool=pool)
     finally:
         pool.shutdown()
     assert again.resumed_from == 1 and again.saved == 2

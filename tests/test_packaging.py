@@ -175,13 +175,13 @@ def test_wheel_writes_demonstrations_identical_to_the_source_tree(installed, tmp
     stats = json.loads(run.stdout.strip().splitlines()[-1])
     assert stats["task"] == TASK and stats["saved"] == 1 and stats["steps"] > 0, stats
 
-    from capmj.demos.generate import generate_split
+    from capmj.demos.collect import collect_split
     from capmj.envs.tabletop import EnvConfig
     from capmj.sim.cameras import VIEW_CAMERAS
 
     here = tmp_path / "here"
     config = EnvConfig(cameras=VIEW_CAMERAS, width=int(width), height=int(height), robot_meshes=False)
-    assert generate_split(TASK, "test", 1, here, config=config).saved == 1
+    assert collect_split(TASK, "test", 1, here, config=config).saved == 1
     wheel_files, source_files = _files(out), _files(here)
     assert sorted(wheel_files) == sorted(source_files) and wheel_files == source_files
 

@@ -12,7 +12,7 @@ import sys
 from typing import Sequence
 
 from capmj.demos.dataset import SPLIT_FIRST_SEED
-from capmj.demos.generate import generate_split, make_pool
+from capmj.demos.collect import collect_split, make_pool
 from capmj.envs.tabletop import EnvConfig
 from capmj.errors import CapmjError
 from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
@@ -59,7 +59,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name in tasks:
             if bar is not None:
                 bar.set_description(f"{name}-{args.split}")
-            stats = generate_split(name, args.split, args.n, args.out, config=config, workers=args.workers,
+            stats = collect_split(name, args.split, args.n, args.out, config=config, workers=args.workers,
                                    pool=pool, progress=bar.update if bar is not None else None)
             if bar is not None:
                 bar.update(stats.resumed_from)

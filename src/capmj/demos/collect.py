@@ -1,4 +1,4 @@
-"""Generate oracle demonstrations: the bench oracle driven through :class:`TabletopEnv`.
+"""Collect oracle demonstrations: the bench oracle driven through :class:`TabletopEnv`.
 
 Workers are processes on the ``spawn`` context (MuJoCo/EGL do not survive ``fork`` after GL
 initialisation), as in the bench.  A worker writes one seed's files into ``.partial/<seed>/`` and
@@ -85,7 +85,7 @@ def _info(env: TabletopEnv) -> dict[str, Any]:
             "status": None if res is None else res.status, "poses": poses}
 
 
-def record_episode(task: Task | str, seed: int, config: EnvConfig) -> tuple[EpisodeOutcome, dict[str, Any]]:
+def demonstrate(task: Task | str, seed: int, config: EnvConfig) -> tuple[EpisodeOutcome, dict[str, Any]]:
     """Run the oracle on (task, seed) through the env; the Ravens fields of the episode."""
     t0 = time.perf_counter()
     env = TabletopEnv(task, seed=seed, config=config)
@@ -116,7 +116,7 @@ def record_episode(task: Task | str, seed: int, config: EnvConfig) -> tuple[Epis
 def _job(task: Task | str, seed: int, config: EnvConfig, partial: str) -> EpisodeOutcome:
     """Worker entry: record one seed into ``partial/<seed>/`` (a failure becomes an outcome)."""
     try:
-        outcome, record = record_episode(task, seed, config)
+        outcome, record = demonstrate(task, seed, config)
     except Exception as exc:  # noqa: BLE001 - one seed's crash must not end the run
         return EpisodeOutcome(getattr(task, "name", str(task)), seed, False, 0, f"{type(exc).__name__}: {exc}", 0.0)
     if outcome.success:  # written in final form once; the parent only renames
@@ -129,7 +129,7 @@ def _job(task: Task | str, seed: int, config: EnvConfig, partial: str) -> Episod
     return outcome
 
 
-def generate_split(task: Task | str, split: str, n: int, out: Path | str, *, config: EnvConfig,
+def collect_split(task: Task | str, split: str, n: int, out: Path | str, *, config: EnvConfig,
                    workers: int = 1, progress: Callable[[int], None] | None = None,
                    pool: ProcessPoolExecutor | None = None) -> SplitStats:
     """Save ``n`` successful oracle episodes of ``task`` for ``split`` under ``out`` (resuming).
