@@ -26,10 +26,10 @@ SOLVE_SEEDS = range(10001, 10041, 2)
 
 
 def test_registered_with_tag_and_docstring():
-    assert set(NAMES) <= set(resolve("generated"))
+    assert set(NAMES) <= set(resolve("extended"))
     for n in NAMES:
         t = get_task(n)
-        assert t.tags == frozenset({"generated"}) and validate_task(t, n) == []
+        assert t.tags == frozenset({"extended"}) and validate_task(t, n) == []
 
 
 # --------------------------------------------------------------------------------------- scenes

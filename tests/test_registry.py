@@ -31,7 +31,7 @@ from capmj.tasks.protocol import Verdict, make_scene
 BUILTIN = set(BENCHMARK_TASKS)
 """The ten benchmark tasks A–J (tag ``benchmark``)."""
 CAPMJ_TASKS = {i.name for i in registry.list_tasks() if i.distribution == "capmj"}
-"""Every task capmj itself declares: A–J and the generated tasks (tag ``generated``)."""
+"""Every task capmj itself declares: A–J and the extended tasks 1–10 (tag ``extended``)."""
 CAPMJ_GENERATED = sorted(CAPMJ_TASKS - BUILTIN)
 
 BACKEND = '''
@@ -187,15 +187,17 @@ def fresh_registry(monkeypatch):
 
 
 # --------------------------------------------------------------------------------------- built-ins
-def test_builtin_tasks_listed_from_capmj_with_benchmark_or_generated_tag():
+def test_builtin_tasks_listed_from_capmj_with_benchmark_or_extended_tag():
     infos = {i.name: i for i in registry.list_tasks()}
     assert set(infos) == CAPMJ_TASKS and BUILTIN < CAPMJ_TASKS
     for name, info in infos.items():
         assert info.distribution == "capmj" and info.version
         assert info.value.startswith("capmj_tasks.") and info.value.endswith(":TASK")
-        assert registry.tags_of(name) == ({"benchmark"} if name in BUILTIN else {"generated"})
+        assert registry.tags_of(name) == ({"benchmark"} if name in BUILTIN else {"extended"})
     assert registry.resolve("benchmark") == sorted(BUILTIN)
-    assert registry.resolve("generated") == CAPMJ_GENERATED == sorted(GENERATED_TASKS)
+    assert registry.resolve("extended") == CAPMJ_GENERATED == sorted(GENERATED_TASKS)
+    with pytest.warns(FutureWarning, match="'generated' is now 'extended'"):  # the old name still selects them
+        assert registry.resolve("generated") == CAPMJ_GENERATED
     assert registry.broken(load=True) == {}
 
 

@@ -57,7 +57,7 @@ def test_registry_names_and_protocol():
     assert sorted(resolve("benchmark")) == sorted(SPEC_NAMES)
     for t in TASKS.values():
         assert isinstance(t, Task)
-        assert t.tags & {"benchmark", "generated"}, t.name
+        assert t.tags & {"benchmark", "extended"}, t.name
         assert (t.name in SPEC_NAMES) == ("benchmark" in t.tags)
         doc = type(t).__doc__ or ""
         for part in ("Task Description:", "Randomizations:", "Success Conditions:"):

@@ -11,7 +11,7 @@ from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Bounds, Spawner, pick_colors
 
-from capmj_tasks.common import GENERATED, BenchTask, shuffled, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, shuffled, verdict
 from capmj_tasks.structures import BLOCK, RING_GAP, Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
 
 ZONE_SCALE = 3.0
@@ -52,7 +52,7 @@ class BuildConcentricCircles(BenchTask):
     """
 
     name = "build-concentric-circles"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         zc, c1, c2 = pick_colors(rng, 3)

@@ -8,7 +8,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
 
-from capmj_tasks.common import GENERATED, BenchTask, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, verdict
 from capmj_tasks.structures import Judgement, check_layers, layer_goal
 
 PITCH = 0.045
@@ -37,7 +37,7 @@ class BuildCube(BenchTask):
     """
 
     name = "build-cube"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         zc, bc = pick_colors(rng, 2)

@@ -8,7 +8,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
 
-from capmj_tasks.common import GENERATED, BenchTask, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, verdict
 from capmj_tasks.structures import Judgement, check_layers, layer_goal
 
 PITCH = 0.05
@@ -41,7 +41,7 @@ class BuildRectangularPyramid(BenchTask):
     """
 
     name = "build-rectangular-pyramid"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         zc, bc = pick_colors(rng, 2)

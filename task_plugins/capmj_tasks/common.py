@@ -12,11 +12,12 @@ from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
+from capmj.tasks.builtin import BENCHMARK_TAG, EXTENDED_TAG
 from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
 
-BENCHMARK = frozenset({"benchmark"})
-GENERATED = frozenset({"generated"})
-"""Tag of the generated tasks 1–10 (thesis Table 5.3): unseen by the planner's few-shot prompt."""
+BENCHMARK = frozenset({BENCHMARK_TAG})
+EXTENDED = frozenset({EXTENDED_TAG})
+"""Tag of the extended tasks 1–10 (thesis Table 5.3, written by hand): unseen by the planner's few-shot prompt."""
 
 
 def label(spec: ObjectSpec) -> str:
@@ -171,6 +172,6 @@ class SelectedStackTask(BenchTask):
 
 
 __all__ = [
-    "BENCHMARK", "BenchTask", "GENERATED", "SelectedStackTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
+    "BENCHMARK", "BenchTask", "EXTENDED", "SelectedStackTask", "StackReport", "check_stack", "exclusive_zone", "label", "shuffled",
     "solved_state", "stack_goals", "stack_targets", "start_positions", "verdict",
 ]

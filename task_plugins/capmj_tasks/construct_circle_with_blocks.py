@@ -12,7 +12,7 @@ from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
 
-from capmj_tasks.common import GENERATED, BenchTask, label, shuffled, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, label, shuffled, verdict
 from capmj_tasks.structures import Judgement, check_ring_blocks, colour_goal, ring_radius, ring_targets
 
 MIN_RADIUS = BLOCK_SIZES["small"]
@@ -26,7 +26,7 @@ class CircleTask(BenchTask):
     ``zone`` (task 3) or ``ball`` (task 4), the object the circle must lie in or go around.
     """
 
-    tags = GENERATED
+    tags = EXTENDED
 
     def centre_of(self, scene: Scene) -> tuple[float, float]:
         obj = scene.by_id(scene.info["zone"] if "zone" in scene.info else scene.info["ball"])

@@ -8,7 +8,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
-from capmj_tasks.common import GENERATED, BenchTask, label, stack_goals, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, label, stack_goals, verdict
 
 
 class DivideBlocks(BenchTask):
@@ -32,7 +32,7 @@ class DivideBlocks(BenchTask):
     """
 
     name = "divide-blocks"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         n = int(rng.integers(7, 9))

@@ -11,7 +11,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
 from capmj.tasks.spawn import DEFAULT_COLORS, Spawner, pick_color, pick_colors
-from capmj_tasks.common import GENERATED, BenchTask, label, shuffled, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, label, shuffled, verdict
 
 SLOT_NAMES = ("(0,0,0)", "(a,0,0)", "(0,a,0)")
 
@@ -57,7 +57,7 @@ class InsertBlocksInFixture(BenchTask):
     """
 
     name = "insert-blocks-in-fixture"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         nf = int(rng.integers(2, 5))

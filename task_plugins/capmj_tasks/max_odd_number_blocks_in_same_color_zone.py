@@ -10,7 +10,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Scene, Target, Verdict
 from capmj.tasks.spawn import Spawner, pick_colors
-from capmj_tasks.common import GENERATED, BenchTask, label, shuffled, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, label, shuffled, verdict
 
 MAX_PER_COLOR = 6
 """At most this many blocks per colour, so a zone takes at most 5 (its spot grid below)."""
@@ -38,7 +38,7 @@ class MaxOddNumberBlocksInSameColorZone(BenchTask):
     """
 
     name = "max-odd-number-blocks-in-same-color-zone"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         while True:

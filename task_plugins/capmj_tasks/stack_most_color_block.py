@@ -6,7 +6,7 @@ import numpy as np
 
 from capmj.tasks.protocol import Scene
 from capmj.tasks.spawn import Spawner, pick_color, pick_colors
-from capmj_tasks.common import GENERATED, SelectedStackTask, shuffled
+from capmj_tasks.common import EXTENDED, SelectedStackTask, shuffled
 
 MAJORITY = (3, 6)
 """Size range of the majority colour: at most six small blocks (a 0.24 m tower) stay reachable."""
@@ -29,7 +29,7 @@ class StackMostColorBlock(SelectedStackTask):
     """
 
     name = "stack-most-color-block"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         while True:

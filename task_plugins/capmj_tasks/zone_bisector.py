@@ -11,7 +11,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 from capmj.tasks.protocol import OracleGoal, Resample, Scene, Target, Verdict
 from capmj.tasks.spawn import SPAWN_BOUNDS, Spawner, centre_bounds, pick_colors
-from capmj_tasks.common import GENERATED, BenchTask, label, verdict
+from capmj_tasks.common import EXTENDED, BenchTask, label, verdict
 
 BLOCK = BLOCK_SIZES["small"]
 PITCH = 2 * BLOCK
@@ -59,7 +59,7 @@ class ZoneBisector(BenchTask):
     """
 
     name = "zone-bisector"
-    tags = GENERATED
+    tags = EXTENDED
 
     def generate(self, rng: np.random.Generator) -> Scene:
         n = int(rng.integers(4, 7))

@@ -23,7 +23,7 @@ from capmj.llm.options import add_llm_options, llm_values
 
 __all__ = ["build_parser", "main", "markdown"]
 
-DEFAULT_TASKS = "benchmark,generated"
+DEFAULT_TASKS = "benchmark,extended"
 DEFAULT_SEEDS = "10001:10011:2"
 """The first five test seeds (the issue's measurement: 20 tasks × 5 test seeds)."""
 EXIT_BUDGET = 3

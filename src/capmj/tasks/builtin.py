@@ -1,7 +1,8 @@
 """capmj's own tasks by name, in the thesis's order: the one place the names are written out.
 
-The ten benchmark tasks A–J (thesis Table 5.1, tag ``benchmark``) and the ten generated tasks 1–10
-(Tables 5.3 and 5.4, tag ``generated``).  The tasks themselves are plugins like any other
+The ten benchmark tasks A–J (thesis Table 5.1, tag ``benchmark``) and the ten extended tasks 1–10
+(Tables 5.3 and 5.4, tag ``extended``: the thesis's generator wrote them, capmj's versions are
+written by hand; ``generated-by-llm`` marks what capmj's own generator writes).  The tasks themselves are plugins like any other
 (``task_plugins/capmj_tasks``, declared in ``pyproject.toml``'s ``capmj.tasks`` entry points) and
 are found through the registry; what the registry cannot say is their letters and numbers, which
 reports print in front of the names and order rows by.  Names only: importing this module imports
@@ -10,6 +11,14 @@ these lists and the registered tasks' tags agree.
 """
 
 from __future__ import annotations
+
+BENCHMARK_TAG = "benchmark"
+"""Tag of the benchmark tasks A–J."""
+EXTENDED_TAG = "extended"
+"""Tag of the extended tasks 1–10: hand-written here, unseen by the planner's few-shot prompt."""
+RENAMED_TAGS: dict[str, str] = {"generated": EXTENDED_TAG}
+"""Old tag -> new tag.  ``generated`` marked the hand-written tasks 1–10 beside ``generated-by-llm``
+on real generator output; a selection by the old name still works, with a warning."""
 
 BENCHMARK_TASKS: tuple[str, ...] = (
     "stack-all-blocks-on-a-zone",                      # A
@@ -40,9 +49,10 @@ GENERATED_TASKS: tuple[str, ...] = (
     "zone-bisector",                             # 9
     "insert-blocks-in-fixture",                  # 10
 )
-"""The generated tasks 1–10 in the thesis's order (Tables 5.3 and 5.4)."""
+"""The extended tasks 1–10 in the thesis's order (Tables 5.3 and 5.4, where they are the generated tasks)."""
 
 GENERATED_NUMBERS: dict[str, int] = {name: k for k, name in enumerate(GENERATED_TASKS, start=1)}
 """The thesis's number of each generated task: its row's order and label in reports."""
 
-__all__ = ["BENCHMARK_TASKS", "GENERATED_NUMBERS", "GENERATED_TASKS", "TASK_LETTERS"]
+__all__ = ["BENCHMARK_TAG", "BENCHMARK_TASKS", "EXTENDED_TAG", "GENERATED_NUMBERS", "GENERATED_TASKS", "RENAMED_TAGS",
+           "TASK_LETTERS"]

@@ -30,6 +30,7 @@ import inspect
 import os
 import re
 import threading
+import warnings
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -37,6 +38,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 from capmj.confine.manifest import confinement_problems
 from capmj.errors import ConfigError, ConfinementError, PluginError
+from capmj.tasks.builtin import RENAMED_TAGS
 
 if TYPE_CHECKING:  # the protocol pulls in numpy and the simulator; listing must stay cheap
     from capmj.tasks.protocol import Task
@@ -262,7 +264,8 @@ class TaskRegistry:
         The result keeps the selector's order, drops repeats, and sorts the names within one
         ``all`` or tag.  A name counts before a tag of the same spelling.  Names and ``all`` need
         metadata only (a plugin that fails to import then fails at :meth:`get_task`, per
-        episode).  Tags need the task objects, so resolving a tag imports the plugins; those that
+        episode).  A renamed tag (:data:`~capmj.tasks.builtin.RENAMED_TAGS`) still selects what
+        carries its new name, with a ``FutureWarning``, besides any plugin's own use of the old one.  Tags need the task objects, so resolving a tag imports the plugins; those that
         fail are skipped and listed by :meth:`broken` instead of failing the whole selection.
         Unknown entries raise :class:`ConfigError` naming the valid names and tags.
         """
@@ -292,6 +295,11 @@ class TaskRegistry:
                 picked = [tok]
             else:
                 picked = [n for n, tags in tag_index().items() if tok in tags]
+                renamed = [n for n, tags in tag_index().items() if RENAMED_TAGS.get(tok) in tags]
+                if renamed:
+                    warnings.warn(f"tag {tok!r} is now {RENAMED_TAGS[tok]!r} (it marked capmj's hand-written tasks "
+                                  f"1-10, not LLM output); select {RENAMED_TAGS[tok]!r}", FutureWarning, stacklevel=2)
+                    picked = sorted({*picked, *renamed})
                 if not picked:
                     unknown.append(tok)
             out.extend(n for n in picked if n not in out)
