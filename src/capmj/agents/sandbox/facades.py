@@ -275,8 +275,18 @@ def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
     return wrapper
 
 
+@functools.cache
+def _numpy_text_ready() -> None:
+    """Make numpy set up its array printing now, outside sandboxed frames: the first ``str`` or
+    ``repr`` of an array imports numpy's printing code, and an import from plan code (an
+    f-string with an array in it) finds no ``__import__`` in the curated builtins and fails."""
+    str(_np.zeros(1))
+    repr(_np.zeros(1))
+
+
 def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
     """Fresh facades for one run (they close over the run's budget and random generator)."""
+    _numpy_text_ready()
     import shapely.affinity
     import shapely.geometry
 
