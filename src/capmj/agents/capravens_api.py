@@ -68,8 +68,8 @@ class CapRavensFunctions:
         """Whether ``obj_name``'s centre lies inside ``container_name``'s footprint, seen from
         above: a zone's square turned by its yaw (capmj's one rule for "in the zone", the one
         the tasks judge by), a bowl's disc, a block's turned square.  Height is not checked, so a
-        block on a stack in a zone is in it.  (CapRavens' ``bbox_contains_pt`` tested the axis-aligned box;
-        for a turned zone that box is larger than the zone.)"""
+        block on a stack in a zone is in it.  (The name says bounding box, but a turned zone's
+        world box is larger than the zone, and capmj has one rule for "in": the footprint.)"""
         api = self._api
         container, obj = api._resolve(container_name), api._resolve(obj_name)
         if container.obj_id == obj.obj_id:
