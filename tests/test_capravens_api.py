@@ -197,3 +197,11 @@ def test_plan_code_asks_parse_question_through_the_lmp():
     assert "parse_question" in session.helper_env()
     session.max_helper_depth = 0
     assert "parse_question" not in session.helper_env()
+
+
+def test_a_porting_difference_is_labelled_as_the_value_error_it_was():
+    """Picking a fixed object was a ValueError (api_misuse for a plan without attempt facts); as a
+    PortingDifference it keeps that label."""
+    from capmj.bench.failures import _error_label
+
+    assert _error_label("PortingDifference", None) == _error_label("ValueError", None) == "api_misuse"
