@@ -33,6 +33,7 @@ QUESTIONS = {
     "planner": f"{OBJECTS}\n# {GOAL}",
     "parse_obj_name": f"{OBJECTS}\n# the blocks left of the purple zone.",
     "parse_position": f"{OBJECTS}\n# a point 0.1 m to the right of the orange zone.",
+    "parse_question": f"{OBJECTS}\n# is the pink block in the orange zone?",
     "parse_function": "# define function: blocks = get_blocks_in_area(area).",
     "parse_completion": f"{OBJECTS}\n# goal: {GOAL}",
 }

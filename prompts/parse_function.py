@@ -20,15 +20,23 @@ def get_distance(pos_a, pos_b):
 #@ end
 
 #@ example: get_blocks_in_zone
-#@ scene: {"objects": [["zone", "red", 0.5, 0.2], ["block", "blue", 0.52, 0.18], ["block", "yellow", 0.4, -0.2]]}
+#@ scene: {"objects": [["zone", "red", 0.5, 0.2, null, null, 0.785], ["block", "blue", 0.52, 0.18], ["block", "yellow", 0.56, 0.26], ["block", "green", 0.4, -0.2]]}
 #@ check: get_blocks_in_zone('fixed red zone with obj_id 1') == ['movable small blue block with obj_id 2']
 # define function: inside = get_blocks_in_zone('fixed red zone with obj_id 1').
 def get_blocks_in_zone(zone):
-    xmin, ymin, _, xmax, ymax, _ = get_bbox(zone)
+    # In a zone = the centre inside the zone's square, which is turned by the zone's yaw;
+    # the world box of a turned square is larger than the square, so use the zone's own axes.
+    cx, cy, _ = get_obj_pos(zone)
+    q = get_obj_rot(zone)
+    yaw = 2 * math.atan2(q[2], q[3])
+    xmin, _, _, xmax, _, _ = get_bbox(zone)
+    half = (xmax - xmin) / (abs(math.cos(yaw)) + abs(math.sin(yaw))) / 2
     inside = []
     for name in get_obj_names():
         x, y, _ = get_obj_pos(name)
-        if ' block ' in name and xmin <= x <= xmax and ymin <= y <= ymax:
+        u = (x - cx) * math.cos(yaw) + (y - cy) * math.sin(yaw)
+        v = -(x - cx) * math.sin(yaw) + (y - cy) * math.cos(yaw)
+        if ' block ' in name and abs(u) <= half and abs(v) <= half:
             inside.append(name)
     return inside
 #@ end

@@ -20,7 +20,7 @@ from capmj.sim.world import World
 from capmj.tasks.protocol import Scene
 from capmj.tasks.registry import get_task
 
-HELPER_LMPS = ("parse_obj_name", "parse_position", "parse_function", "parse_completion")
+HELPER_LMPS = ("parse_obj_name", "parse_position", "parse_question", "parse_function", "parse_completion")
 ALL_LMPS = ("planner",) + HELPER_LMPS
 
 

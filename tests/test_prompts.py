@@ -110,7 +110,8 @@ def test_planner_example_succeeds(lmp: str, example) -> None:
     assert all(lmp in HELPER_LMPS for lmp, _ in llm.asked)
 
 
-@pytest.mark.parametrize(("lmp", "example"), examples("parse_obj_name") + examples("parse_position"),
+@pytest.mark.parametrize(("lmp", "example"), examples("parse_obj_name") + examples("parse_position")
+                         + examples("parse_question"),
                          ids=lambda v: getattr(v, "id", v))
 def test_helper_example_returns_expected_value(lmp: str, example) -> None:
     ctx = build_context(example)

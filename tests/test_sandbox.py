@@ -317,6 +317,20 @@ def test_print_output_is_captured_not_written(capsys: pytest.CaptureFixture[str]
     assert capsys.readouterr().out == ""
 
 
+def test_an_f_string_with_an_array_works_as_the_first_array_text_of_a_process() -> None:
+    """numpy imports its printing code on the first str() of an array; from plan code that import
+    met curated builtins without __import__ ("Unable to configure default ndarray.__str__").  A
+    fresh interpreter, so no earlier test has printed an array already."""
+    import subprocess
+
+    probe = ("from capmj.agents.sandbox import run_code\n"
+             "ns = run_code('s = f\"{np.array([1.5, 2.0])} {np.zeros(2)!r}\"', {})\n"
+             "print(ns['s'])\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "[1.5 2. ] array([0., 0.])"
+
+
 def test_numpy_results_are_real_arrays() -> None:
     ns = run("a = np.zeros((2, 3))\na *= 2\nb = np.linalg.norm(np.array([3.0, 4.0]))")
     assert isinstance(ns["a"], np.ndarray) and ns["a"].shape == (2, 3) and ns["b"] == 5.0

@@ -36,9 +36,14 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from capmj.agents.api_values import ONE_ELEMENT_LISTS, Coordinate, denormalize_uv
+from capmj.agents.api_values import is_pose as _is_pose
+from capmj.agents.api_values import is_vector as _is_vector
+from capmj.agents.api_values import summary as _summary
 from capmj.agents.base import EpisodeContext
+from capmj.agents.capravens_api import CapRavensFunctions
 from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, ROUND_KINDS, TILTED, Footprints
-from capmj.errors import MotionFailed, UnknownObjectError, describe
+from capmj.errors import MotionFailed, PortingDifference, UnknownObjectError, describe
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import quat_euler_xyz, quat_yaw, wxyz
@@ -48,28 +53,6 @@ CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bo
 SIDE_NAMES = ("top side", "right side", "bottom side", "left side")
 _CORNERS_UV = ((0.0, 1.0), (1.0, 1.0), (0.0, 0.0), (1.0, 0.0))
 _SIDES_UV = ((0.5, 1.0), (1.0, 0.5), (0.5, 0.0), (0.0, 0.5))
-
-
-def denormalize_uv(u: float, v: float) -> tuple[float, float]:
-    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image
-    (x = 0.75 − 0.5 v, y = −0.5 + u on :data:`capmj.sim.bounds.WORKSPACE`)."""
-    w = WORKSPACE
-    return w.xmax - (w.xmax - w.xmin) * float(v), w.ymin + (w.ymax - w.ymin) * float(u)
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-
-
-def _is_vector(v: Any, lengths: tuple[int, ...] = (2, 3)) -> bool:
-    if isinstance(v, np.ndarray):
-        return v.ndim == 1 and len(v) in lengths and np.issubdtype(v.dtype, np.number)
-    return isinstance(v, (list, tuple)) and len(v) in lengths and all(_is_number(x) for x in v)
-
-
-def _is_pose(v: Any) -> bool:
-    """``(position, quaternion xyzw)``."""
-    return (isinstance(v, (list, tuple)) and len(v) == 2 and _is_vector(v[0]) and _is_vector(v[1], (4,)))
 
 
 _FILLER = frozenset({"the", "a", "an", "with", "obj", "id", "object", "of"})
@@ -96,6 +79,21 @@ def near_miss(query: str, objects: Sequence[ObjectSpec]) -> ObjectSpec | None:
     return fits[0] if len(fits) == 1 else None
 
 
+def porting_difference(obj: str, objs: Sequence[ObjectSpec]) -> None:
+    """PortingDifference for an unknown name that CapRavens' scenes could have had: a fixed
+    block (capmj's blocks are all movable) or obj_id 0 (capmj's ids count from 1)."""
+    words = _words(obj)
+    if "fixed" in words:
+        fit = near_miss(" ".join(w for w in words if w != "fixed"), objs)
+        if fit is not None and not fit.fixed:
+            raise PortingDifference(f"unknown object {obj!r}: capmj has no fixed {fit.kind}s (every {fit.kind} "
+                                    f"is movable, unlike CapRavens' fixed blocks); the {fit.kind} meant is "
+                                    f"{fit.name!r}")
+    if re.search(r"obj_id\s*0\b", obj):
+        raise PortingDifference(f"unknown object {obj!r}: capmj's obj_ids count from 1 (CapRavens' were "
+                                f"PyBullet body ids); valid ids: {sorted(o.obj_id for o in objs)}")
+
+
 def _closest(query: str, names: Sequence[str], n: int = 3) -> list[str]:
     """Names sharing the most words with ``query`` (ties by string similarity)."""
     words = set(_words(query)) - _FILLER
@@ -104,18 +102,6 @@ def _closest(query: str, names: Sequence[str], n: int = 3) -> list[str]:
         return (len(words & set(_words(name))), difflib.SequenceMatcher(None, query.lower(), name.lower()).ratio())
 
     return sorted(names, key=score, reverse=True)[:n]
-
-
-def _summary(value: Any, limit: int = 160) -> str:
-    if isinstance(value, np.ndarray):
-        text = np.array2string(np.round(value, 4), separator=", ", threshold=20)
-    elif isinstance(value, float):
-        text = f"{value:.4f}"
-    elif isinstance(value, (list, tuple)) and value and all(isinstance(v, float) for v in value):
-        text = "[" + ", ".join(f"{v:.4f}" for v in value) + "]"
-    else:
-        text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class PlannerAPI:
@@ -148,7 +134,8 @@ class PlannerAPI:
             for o in objs:
                 if o.obj_id == int(obj):
                     return o
-            raise UnknownObjectError(f"no object with obj_id {int(obj)}; valid ids: {sorted(o.obj_id for o in objs)}")
+            raise UnknownObjectError(f"no object with obj_id {int(obj)}; valid ids: {sorted(o.obj_id for o in objs)}",
+                                     name=int(obj))
         if not isinstance(obj, str):
             raise ValueError(f"expected an object name (str), got {type(obj).__name__} {_summary(obj, 80)}")
         for o in objs:
@@ -164,12 +151,14 @@ class PlannerAPI:
             if self.call_log:  # the call being made: the log shows what the name meant
                 self.call_log[-1].setdefault("resolved", []).append(f"{obj!r} -> {fit.name!r}")
             return fit
+        porting_difference(obj, objs)
         names = [o.name for o in objs]
         close = _closest(obj, names)
         hint = f"; closest names: {', '.join(map(repr, close))}" if close else ""
         shown = names[:6]
         more = f" … ({len(names)} objects)" if len(names) > len(shown) else ""
-        raise UnknownObjectError(f"unknown object {obj!r}{hint}. Valid names: {', '.join(map(repr, shown))}{more}")
+        raise UnknownObjectError(f"unknown object {obj!r}{hint}. Valid names: {', '.join(map(repr, shown))}{more}",
+                                 name=obj)
 
     # ================================================================== poses
     def _pos(self, oid: int) -> np.ndarray:
@@ -235,6 +224,8 @@ class PlannerAPI:
         if _is_pose(pos):
             pos = pos[0]
         if not _is_vector(pos):
+            if isinstance(pos, Coordinate):
+                raise PortingDifference(f"expected a position, got one number {pos!r}: {ONE_ELEMENT_LISTS}")
             raise ValueError(f"expected a position [x, y] or [x, y, z], got {_summary(pos, 80)}")
         return np.asarray(pos, float)[:2]
 
@@ -243,6 +234,10 @@ class PlannerAPI:
             return [o.name for o in self._footprints.overlapping(self._resolve(targ))]
         if isinstance(targ, (list, tuple)) and len(targ) == 1 and (_is_vector(targ[0]) or _is_pose(targ[0])):
             targ = targ[0]  # the original API's one-element position lists
+        if (isinstance(targ, (list, tuple)) and len(targ) > 1 and not _is_vector(targ) and not _is_pose(targ)
+                and all(_is_vector(t) or _is_pose(t) for t in targ)):
+            hits = [o.name for t in targ for o in self._footprints.within(self._xy(t), r)]
+            return list(dict.fromkeys(hits))  # several target positions: what occupies any of them
         return [o.name for o in self._footprints.within(self._xy(targ), r)]
 
     def _free_pos(self, targ: Any, area: Any, r: float) -> list[float]:
@@ -283,7 +278,7 @@ class PlannerAPI:
         else:
             held = self._resolve(obj)
             if held.fixed:
-                raise ValueError(f"{held.name!r} is fixed and cannot be picked")
+                raise PortingDifference(f"{held.name!r} is fixed and cannot be picked")
             above = self._footprints.resting_on(held)
             if above:
                 raise ValueError(f"cannot pick {held.name!r}: {above[0].name!r} lies on top of it; move that first")
@@ -315,6 +310,8 @@ class PlannerAPI:
                 yaw = quat_yaw(wxyz(target[1]))
                 target = target[0]
             if not _is_vector(target):
+                if isinstance(target, Coordinate):
+                    raise PortingDifference(f"target is one number, {target!r}: {ONE_ELEMENT_LISTS}")
                 raise ValueError("target must be an object name, [x, y], [x, y, z] or (position, quaternion "
                                  f"xyzw), got {_summary(target, 80)}")
             p = np.asarray(target, float)
@@ -331,7 +328,7 @@ class PlannerAPI:
             raise MotionFailed(f"put_first_on_second: picked {got!r} instead of {held.name!r}", status="wrong_object")
 
 
-class PlanFunctions:
+class PlanFunctions(CapRavensFunctions):
     """The planner API functions of one episode, one method each, over a :class:`PlannerAPI`.
 
     The methods named in :data:`API_FUNCTIONS` are what plan code calls: their names, signatures
@@ -365,7 +362,7 @@ class PlanFunctions:
         """
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_pos(o) for o in obj]
-        return [float(v) for v in self._api._pos(self._api._resolve(obj).obj_id)]
+        return [Coordinate(v) for v in self._api._pos(self._api._resolve(obj).obj_id)]
 
     def get_obj_rot(self, obj):
         """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list.
@@ -373,7 +370,7 @@ class PlanFunctions:
         Objects start at random yaws (about z); an upright object's yaw is 2 atan2(z, w)."""
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_rot(o) for o in obj]
-        return self._api._quat_xyzw(self._api._resolve(obj).obj_id)
+        return [Coordinate(v) for v in self._api._quat_xyzw(self._api._resolve(obj).obj_id)]
 
     def get_bbox(self, obj):
         """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out.
@@ -423,28 +420,6 @@ class PlanFunctions:
         x, y = denormalize_uv(arr[0], arr[1])
         return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
 
-    def denormalize_xy(self, pos, size=None):
-        """CapRavens' name for :meth:`denormalize`: normalised [u, v] → world [x, y] (a numpy array,
-        as there).  With ``size`` = (sx, sy) the result is an offset inside a box of that size
-        centred on the origin instead: [v sx − sx/2, u sy − sy/2] (the original's formula)."""
-        arr = np.asarray(pos, float)
-        if arr.ndim != 1 or len(arr) != 2:
-            raise ValueError(f"denormalize_xy expects [u, v], got {_summary(pos, 80)}")
-        if size is None:
-            return np.array(denormalize_uv(arr[0], arr[1]))
-        sx, sy = (float(v) for v in size[:2])
-        return np.array([arr[1] * sx - sx / 2, arr[0] * sy - sy / 2])
-
-    def denormalize_bbox(self, bbox):
-        """A normalised area (umin, vmin, umax, vmax) → the world area (xmin, ymin, xmax, ymax), as
-        ``get_random_free_pos(area=...)`` takes it (CapRavens' ``denormalize_bbox``)."""
-        if not _is_vector(bbox, (4,)):
-            raise ValueError(f"denormalize_bbox expects (umin, vmin, umax, vmax), got {_summary(bbox, 80)}")
-        umin, vmin, umax, vmax = (float(v) for v in bbox)
-        x0, y0 = denormalize_uv(umin, vmax)
-        x1, y1 = denormalize_uv(umax, vmin)
-        return [x0, y0, x1, y1]
-
     def get_corner_name(self, pos) -> str:
         """Name of the workspace corner nearest to a position ("top left corner", ...)."""
         p = self._api._xy(pos)
@@ -463,7 +438,8 @@ class PlanFunctions:
         ``targ`` a position ([x, y], [x, y, z] or (position, quaternion)): every object whose
         footprint lies within ``r`` m of its xy.  ``targ`` a name: every other object whose
         footprint overlaps that object's footprint (e.g. blocks in a zone, or the zone under a
-        block and whatever is stacked on it).  Zones, bowls and the like count as objects.
+        block and whatever is stacked on it).  ``targ`` a list of positions or poses: the objects
+        occupying any of them, each once.  Zones, bowls and the like count as objects.
         """
         return self._api._occupied(targ, float(r))
 
@@ -536,6 +512,8 @@ API_FUNCTIONS: tuple[str, ...] = (
     "put_first_on_second",
     "stack_objects_in_order",
     "say",
+    "is_obj_visible",
+    "bbox_contains_pt",
     "get_obj_positions_np",
     "get_obj_rotations_np",
     "get_corner_name",

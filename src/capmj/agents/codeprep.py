@@ -36,7 +36,8 @@ SANDBOX_GLOBALS = PROVIDED_NAMES
 # when every name they bind is already available.  Any other import reaches the sandbox, which
 # rejects it (and ends the attempt with a recorded error).
 _BENIGN_MODULES = frozenset({"numpy", "math", "itertools", "shapely", "shapely.geometry",
-                             "shapely.affinity", "env_utils", "plan_utils", "utils"})
+                             "shapely.affinity", "env_utils", "plan_utils", "utils",
+                             "cliport.utils"})
 # ``from M import *`` is dropped for these: every public name code uses from them is provided
 # (shapely's geometry classes and affinity functions are globals; the API modules are the env).
 _STAR_MODULES = frozenset({"shapely.geometry", "shapely.affinity", "env_utils", "plan_utils", "utils"})
@@ -48,6 +49,8 @@ RESERVED: dict[str, str] = {
                       "levels deep may call: parse_obj_name(description, context=None) returns object names",
     "parse_position": "it is a helper LMP that the plan and helper code up to LMPSession.max_helper_depth "
                       "levels deep may call: parse_position(description, context=None) returns a position or pose",
+    "parse_question": "it is a helper LMP that the plan and helper code up to LMPSession.max_helper_depth "
+                      "levels deep may call: parse_question(question, context=None) returns the answer",
     "parse_function": "it writes missing functions before code runs; code does not call it",
     "parse_completion": "it is the reporter's checker, run by the benchmark after the plan",
     "tabletop_ui": "it is the planner itself; write the plan's statements directly",

@@ -192,6 +192,7 @@ class LMPSession:
         if self._helper_depth < self.max_helper_depth:
             env["parse_obj_name"] = self.parse_obj_name
             env["parse_position"] = self.parse_position
+            env["parse_question"] = self.parse_question
         if question is not None:
             names = object_names(question)
             if names is not None:
@@ -199,10 +200,12 @@ class LMPSession:
         return env
 
     def plan_env(self) -> dict[str, Any]:
-        """What plan code may use: the whole API plus the helper LMPs."""
+        """What plan code may use: the whole API plus the helper LMPs (parse_obj_name,
+        parse_position, parse_question)."""
         env: dict[str, Any] = dict(self.api)
         env["parse_obj_name"] = self.parse_obj_name
         env["parse_position"] = self.parse_position
+        env["parse_question"] = self.parse_question
         return env
 
     # -- code preparation --------------------------------------------------------------------
@@ -316,6 +319,13 @@ class LMPSession:
         ctx = context if isinstance(context, str) and context.strip() else self.objects_text()
         question = f"{ctx.strip()}\n# {_sentence(description)}"
         return self.run_lmp("parse_position", question, "ret_val", query=str(description))
+
+    def parse_question(self, description: str, context: str | None = None) -> Any:
+        """The answer to a question about the scene (``ret_val``): a bool, a number or names.
+        CapRavens' planner asks it ("is the blue block left of the bowl?", "how many ...")."""
+        ctx = context if isinstance(context, str) and context.strip() else self.objects_text()
+        question = f"{ctx.strip()}\n# {_sentence(description)}"
+        return self.run_lmp("parse_question", question, "ret_val", query=str(description))
 
     def parse_function(self, name: str, site: str) -> str:
         """Source of ``def name(...)`` written for the call statement ``site``."""

@@ -7,7 +7,8 @@ therefore runs its code in an environment that pre-binds everything its examples
 once from the settled scene it judges:
 
 ``poses``          ``{name: ([x, y, z], [roll, pitch, yaw])}`` (= ``get_obj_pos_dict()``); also bound
-                   as ``object_positions``, the name CapRavens' checking code reads it under
+                   as ``object_positions``, the name CapRavens' checking code reads it under;
+                   a near-miss name as key reads its object (:class:`NamedPoses`)
 ``sizes``          ``{block name: edge length (m)}``
 ``blocks``, ``zones``, ``bowls``   object names by kind, in scene order
 ``goal_objects``   ``{'orange zone': 'fixed orange zone with obj_id 1', ...}``: every
@@ -32,10 +33,11 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from capmj.sim.objects import BLOCK_SIZES
+from capmj.agents.api import near_miss, porting_difference
+from capmj.sim.objects import BLOCK_SIZES, ObjectSpec
 from capmj.tasks.predicates import in_square
 
-__all__ = ["PREBOUND", "goal_objects", "reporter_env"]
+__all__ = ["PREBOUND", "NamedPoses", "goal_objects", "reporter_env"]
 
 PREBOUND = ("poses", "object_positions", "sizes", "blocks", "zones", "bowls", "goal_objects", "size", "upright", "in_zone",
             "in_bowl", "on_top")
@@ -62,9 +64,28 @@ def goal_objects(goal: str, objects: Sequence[Any]) -> dict[str, str]:
     return out
 
 
+class NamedPoses(dict):
+    """``poses`` / ``object_positions``: keyed by capmj's names, and a near-miss key reads the one
+    object it can only mean, as the API's names do (:func:`capmj.agents.api.near_miss`).
+    CapRavens' checking code indexes the dict with names such as ``'red block with obj_id 1'``;
+    an obj_id 0 or a fixed block is a PortingDifference naming why, anything else a KeyError."""
+
+    def __init__(self, poses: Mapping[str, Any], objects: Sequence[ObjectSpec]) -> None:
+        super().__init__(poses)
+        self._objects = tuple(objects)
+
+    def __missing__(self, key: Any) -> Any:
+        if isinstance(key, str):
+            fit = near_miss(key, self._objects)
+            if fit is not None and fit.name in self:
+                return self[fit.name]
+            porting_difference(key, self._objects)
+        raise KeyError(key)
+
+
 def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], goal: str) -> dict[str, Any]:
     """The pre-bound names (see the module docstring) for the current scene."""
-    poses: dict[str, tuple[list[float], list[float]]] = api["get_obj_pos_dict"]()
+    poses = NamedPoses(api["get_obj_pos_dict"](), [o for o in objects if isinstance(o, ObjectSpec)])
     kinds = {o.name: o.kind for o in objects}
     sizes = {o.name: BLOCK_SIZES[o.size or "small"] for o in objects if o.kind == "block"}
     zone_half = {o.name: o.half_extents[0] for o in objects if o.kind == "zone"}

@@ -41,6 +41,7 @@ from capmj.errors import (
     MotionFailed,
     NoCodeError,
     PlanSyntaxError,
+    PortingDifference,
     SandboxViolation,
     UnknownObjectError,
     error_class,
@@ -75,7 +76,8 @@ def _error_label(error_type: str | None, attempt: AttemptRecord | None) -> str:
             return label
     if attempt is not None and attempt.api_error is not None:
         return "api_misuse"
-    if (attempt is None or attempt.failed_program is None) and error_class(error_type) in (ValueError, TypeError):
+    misuse = error_class(error_type) in (ValueError, TypeError) or _is(error_type, PortingDifference)
+    if (attempt is None or attempt.failed_program is None) and misuse:
         return "api_misuse"  # no attempt facts (a plan of a non-LLM agent): an argument error of an API function
     return "plan_exception"
 

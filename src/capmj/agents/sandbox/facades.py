@@ -1,6 +1,7 @@
 """Layer 3 of the sandbox: read-only library facades, allocation guards and curated builtins.
 
-Plan code never sees a real module: ``np``, ``math``, ``itertools`` and ``shapely`` are
+Plan code never sees a real module: ``np``, ``math``, ``itertools``, ``shapely`` and ``utils`` (the
+Ravens pose helpers CapRavens' code calls, :mod:`capmj.agents.sandbox.ravens_utils`) are
 :class:`_Facade` namespaces of vetted functions, numpy constructors and ``math`` functions with
 huge C loops are size-checked before they run, infinite iterators are bounded, and builtins are
 a fresh curated dict per run so tampering cannot leak between runs.  ``np.random`` draws from
@@ -26,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as _np
 
 from capmj.agents.sandbox.ordered import OrderedFrozenSet, OrderedSet
+from capmj.agents.sandbox.ravens_utils import utils_members
 
 if TYPE_CHECKING:
     from capmj.agents.sandbox.runtime import _Session
@@ -275,8 +277,18 @@ def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
     return wrapper
 
 
+@functools.cache
+def _numpy_text_ready() -> None:
+    """Make numpy set up its array printing now, outside sandboxed frames: the first ``str`` or
+    ``repr`` of an array imports numpy's printing code, and an import from plan code (an
+    f-string with an array in it) finds no ``__import__`` in the curated builtins and fails."""
+    str(_np.zeros(1))
+    repr(_np.zeros(1))
+
+
 def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
     """Fresh facades for one run (they close over the run's budget and random generator)."""
+    _numpy_text_ready()
     import shapely.affinity
     import shapely.geometry
 
@@ -322,6 +334,7 @@ def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
         "math": _Facade("math", math_members),
         "itertools": _Facade("itertools", iter_members),
         "shapely": shapely_facade,
+        "utils": _Facade("utils", utils_members()),
         **geometry,
         **affinity,
     }
@@ -331,7 +344,7 @@ _GEOMETRY_NAMES = ("Point", "Polygon", "LineString", "MultiPoint", "MultiPolygon
 _AFFINITY_NAMES = ("rotate", "translate", "scale")
 
 PROVIDED_NAMES: frozenset[str] = frozenset(
-    ("np", "math", "itertools", "shapely", "print", "range", "type", "True", "False", "None")
+    ("np", "math", "itertools", "shapely", "utils", "print", "range", "type", "True", "False", "None")
     + _GEOMETRY_NAMES + _AFFINITY_NAMES + _SAFE_BUILTINS
 )
 """Every global name ``run_code`` provides besides the caller's ``env`` (facades, shapely
@@ -372,6 +385,8 @@ def _safe_type(table: Mapping[str, object]) -> Callable[[object], object]:
         if len(args) != 1:
             raise TypeError("type() takes exactly one argument in the sandbox (it cannot create classes)")
         kind = type(args[0])
+        if issubclass(kind, float) and kind.__module__.startswith("capmj."):
+            kind = float  # the API's Coordinate is a float to plan code, type(x) == float included
         if kind in exposed:
             return kind
         name = "np.ndarray" if kind is _np.ndarray else f"{kind.__module__}.{kind.__qualname__}"

@@ -1,0 +1,74 @@
+"""What the planner API accepts as a value, and how it shows one: positions, poses, normalised
+workspace coordinates, call-log summaries.
+
+Shared by :mod:`capmj.agents.api` (capmj's functions) and :mod:`capmj.agents.capravens_api`
+(CapRavens' names), so both read a position, a pose and a normalised point the same way.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NoReturn
+
+import numpy as np
+
+from capmj.errors import PortingDifference
+from capmj.sim.bounds import WORKSPACE
+
+ONE_ELEMENT_LISTS = ("get_obj_pos / get_obj_rot return one position [x, y, z] / one quaternion, not CapRavens' "
+                     "one-element list of them: drop the [0] (here get_obj_pos(obj)[0] is already x)")
+"""The message of indexing a :class:`Coordinate`."""
+
+
+class Coordinate(float):
+    """One number of a position or quaternion the API returned: a float in every way, except that
+    indexing or unpacking it raises :class:`~capmj.errors.PortingDifference`.
+
+    CapRavens' ``get_obj_pos`` returned a one-element list of positions, so its code writes
+    ``get_obj_pos(obj)[0][2]`` or ``pos = get_obj_pos(obj)[0]; pos[1]``; here ``[0]`` is already
+    x, and a plain float would fail with "'float' object is not subscriptable", which does not
+    say why.  Arithmetic gives plain floats, numpy makes float64 arrays of it, ``repr`` is a float's.
+    """
+
+    __slots__ = ()
+
+    def __getitem__(self, index: Any) -> NoReturn:
+        raise PortingDifference(ONE_ELEMENT_LISTS)
+
+    def __iter__(self) -> NoReturn:
+        raise PortingDifference(ONE_ELEMENT_LISTS)
+
+
+def denormalize_uv(u: float, v: float) -> tuple[float, float]:
+    """Normalised workspace coordinates → world xy: u left→right, v bottom→top of the image
+    (x = 0.75 − 0.5 v, y = −0.5 + u on :data:`capmj.sim.bounds.WORKSPACE`)."""
+    w = WORKSPACE
+    return w.xmax - (w.xmax - w.xmin) * float(v), w.ymin + (w.ymax - w.ymin) * float(u)
+
+
+def is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def is_vector(v: Any, lengths: tuple[int, ...] = (2, 3)) -> bool:
+    """A flat list, tuple or array of ``lengths`` numbers (default: a position [x, y(, z)])."""
+    if isinstance(v, np.ndarray):
+        return v.ndim == 1 and len(v) in lengths and np.issubdtype(v.dtype, np.number)
+    return isinstance(v, (list, tuple)) and len(v) in lengths and all(is_number(x) for x in v)
+
+
+def is_pose(v: Any) -> bool:
+    """``(position, quaternion xyzw)``."""
+    return (isinstance(v, (list, tuple)) and len(v) == 2 and is_vector(v[0]) and is_vector(v[1], (4,)))
+
+
+def summary(value: Any, limit: int = 160) -> str:
+    """A value as the call log and error messages show it: rounded, at most ``limit`` characters."""
+    if isinstance(value, np.ndarray):
+        text = np.array2string(np.round(value, 4), separator=", ", threshold=20)
+    elif isinstance(value, float):
+        text = f"{value:.4f}"
+    elif isinstance(value, (list, tuple)) and value and all(isinstance(v, float) for v in value):
+        text = "[" + ", ".join(f"{v:.4f}" for v in value) + "]"
+    else:
+        text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
