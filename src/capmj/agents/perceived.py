@@ -16,19 +16,26 @@ theirs (:class:`capmj.perception.track.Tracker`).
 
 The primitive reports which object it gripped by its simulator id; the robot only knows that it
 gripped something, so the result is translated to the perceived object at the pick point.
+
+Beside the API runs a :class:`~capmj.agents.perception_audit.PerceptionAudit`: it scores every
+view against the truth for the episode's record (never feeding anything back into perception),
+and tells the API when a failed pick missed because the perceived point was off the object, so
+that the failure is raised as :class:`~capmj.errors.PerceptionFailed` (same text, its own class).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.footprints import Disc, Footprints, Part, Rect
+from capmj.agents.perception_audit import PerceptionAudit
+from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
@@ -47,14 +54,22 @@ class PerceivedScene:
     ``objects_by_id``, ``pose``, ``aabb``, ``top_z``, ``time``), answered from perception.
     """
 
-    def __init__(self, world: Any, perceiver: Perceiver | None = None) -> None:
+    def __init__(self, world: Any, perceiver: Perceiver | None = None,
+                 observer: Callable[[Tracker], None] | None = None) -> None:
         from capmj.sim.cameras import CameraRig
 
         self._world = world
         self._perceiver: Perceiver = perceiver or ClassicalPerceiver()
+        self._observer = observer
+        """Called with each new tracker (the audit scoring it for the record)."""
         self._rig = CameraRig(world)
         self.calls = 0
         self.tracker = Tracker.start(self._perceive())
+        self._observed()
+
+    def _observed(self) -> None:
+        if self._observer is not None:
+            self._observer(self.tracker)
 
     def _perceive(self) -> tuple:
         frames = [self._rig.render(name, seg=False, include_robot=False) for name in self._rig.camera_names]
@@ -64,6 +79,7 @@ class PerceivedScene:
     def refresh(self, moved: dict[int, tuple[float, float, float]]) -> None:
         """Perceive again after the robot moved the objects in ``moved`` (id -> where it put them)."""
         self.tracker = self.tracker.update(self._perceive(), moved)
+        self._observed()
 
     def close(self) -> None:
         self._rig.close()
@@ -118,9 +134,12 @@ class _PerceivingContext:
     """The episode context as the perceived API uses it: every pick-and-place is followed by a
     fresh perception, and the gripped object is named by perception, not by the simulator."""
 
-    def __init__(self, ctx: EpisodeContext, scene: PerceivedScene) -> None:
+    def __init__(self, ctx: EpisodeContext, scene: PerceivedScene, audit: PerceptionAudit) -> None:
         self._ctx = ctx
         self._scene = scene
+        self._audit = audit
+        self.missed = False
+        """Whether the latest pick missed because of perception (:meth:`PerceptionAudit.pick_missed`)."""
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._ctx, name)
@@ -128,6 +147,7 @@ class _PerceivingContext:
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
         held = self._held_at(pick)
         res = self._ctx.pick_and_place(pick, place, place_yaw)
+        self.missed = self._audit.pick_missed(held, pick, res.obj_id if res.ok else None)
         gripped = held if res.obj_id is not None else None
         moved = {held: tuple(float(v) for v in place)} if res.ok and held is not None else {}
         self._scene.refresh(moved)  # type: ignore[arg-type]
@@ -148,12 +168,24 @@ class _PerceivingContext:
 class PerceivedAPI(PlannerAPI):
     """The planner API over :class:`PerceivedScene` (see the module docstring)."""
 
-    def __init__(self, ctx: EpisodeContext, perceiver: Perceiver | None = None) -> None:
+    def __init__(self, ctx: EpisodeContext, perceiver: Perceiver | None = None, name: str = "rgbd") -> None:
         super().__init__(ctx)
-        self.scene = PerceivedScene(ctx.world, perceiver)
+        audit = PerceptionAudit(ctx, name)
+        self.scene = PerceivedScene(ctx.world, perceiver, observer=audit.observe)
         self._world = self.scene  # type: ignore[assignment]
-        self._ctx = _PerceivingContext(ctx, self.scene)  # type: ignore[assignment]
+        self._perceiving = _PerceivingContext(ctx, self.scene, audit)
+        self._ctx = self._perceiving  # type: ignore[assignment]
         self._footprints = self.scene.footprints()
+
+    def _put(self, obj: Any, target: Any) -> None:
+        """The API's pick-and-place; a miss perception caused is a :class:`PerceptionFailed`."""
+        self._perceiving.missed = False
+        try:
+            super()._put(obj, target)
+        except MotionFailed as exc:
+            if self._perceiving.missed:
+                raise PerceptionFailed(str(exc), status=exc.status) from exc
+            raise
 
 
 def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:

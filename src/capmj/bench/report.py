@@ -30,7 +30,13 @@ from capmj.bench.results import (
     wilson,
     write_result_json,
 )
-from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
+from capmj.bench.sections import (
+    comparison_section,
+    cost_section,
+    failure_section,
+    perception_section,
+    warnings_section,
+)
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
@@ -134,7 +140,8 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                        f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
                        f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
-    out += failure_section(summary, task_label, _order) + cost_section(summary, task_label, _order)
+    out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
+    out += cost_section(summary, task_label, _order)
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
     out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"
