@@ -136,3 +136,19 @@ def test_old_lines_without_perception_load_and_summaries_show_it_per_task() -> N
     md = markdown(summary)
     assert "## Perception (rgbd)" in md and "| perception |" in md.split("## Failures")[1].splitlines()[4]
     assert "perception" not in summarize([state])["overall"]["probe"]
+
+
+def test_the_perception_mode_is_in_the_manifest_and_the_summary(tmp_path) -> None:
+    from capmj.bench.cli import main
+
+    out = tmp_path / "run"
+    assert main(["--agent", "reference", "--perception", "rgbd", "--tasks", TASK, "--seeds", str(SEED),
+                 "--workers", "0", "--no-log", "--no-progress", "--out", str(out)]) == 0
+    config = json.loads((out / "config.json").read_text())
+    assert config["manifest"]["perception"] == "rgbd" and config["args"]["agent_options"]["perception"] == "rgbd"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["configs"]["reference"]["perception"] == "rgbd"
+    md = (out / "summary.md").read_text()
+    assert "Perception: reference = rgbd" in md and "## Perception (rgbd)" in md
+    (line,) = [json.loads(x) for x in (out / "episodes.jsonl").read_text().splitlines()]
+    assert line["perception"]["perceiver"] == "rgbd" and line["perception"]["calls"][0]["stage"] == "reset"

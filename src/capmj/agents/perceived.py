@@ -130,7 +130,7 @@ class PerceivedScene:
         return Footprints(lambda: self.objects, self.pose, self.aabb, self.top_z, self.geom_parts)
 
 
-class _PerceivingContext:
+class PerceivingContext:
     """The episode context as the perceived API uses it: every pick-and-place is followed by a
     fresh perception, and the gripped object is named by perception, not by the simulator."""
 
@@ -173,7 +173,7 @@ class PerceivedAPI(PlannerAPI):
         audit = PerceptionAudit(ctx, name)
         self.scene = PerceivedScene(ctx.world, perceiver, observer=audit.observe)
         self._world = self.scene  # type: ignore[assignment]
-        self._perceiving = _PerceivingContext(ctx, self.scene, audit)
+        self._perceiving = PerceivingContext(ctx, self.scene, audit)
         self._ctx = self._perceiving  # type: ignore[assignment]
         self._footprints = self.scene.footprints()
 
@@ -197,4 +197,4 @@ def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:
     raise ValueError(f"unknown perception mode {perception!r}; valid modes: {', '.join(PERCEPTION_MODES)}")
 
 
-__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "make_api"]
+__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "PerceivingContext", "make_api"]

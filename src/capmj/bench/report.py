@@ -41,7 +41,8 @@ from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
+                 "perception")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
@@ -113,6 +114,9 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     if sources:
         out += ["Sources: " + ", ".join(f"`{s}`" for s in sources), ""]
     out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", ""]
+    seen = {lab: (c or {}).get("perception") for lab, c in (summary.get("configs") or {}).items()}
+    if any(seen.values()):  # what the planner API read: the simulator (state) or the cameras (docs/perception.md)
+        out += ["Perception: " + ", ".join(f"{lab} = {seen[lab] or 'state'}" for lab in labels if lab in seen), ""]
     if not generated:
         out += _success_table(summary, tasks, labels, "Task", None)
     else:

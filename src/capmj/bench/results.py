@@ -300,7 +300,8 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
 
     A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
     per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
-    :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for.
+    :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for and what
+    its planner API read (``perception``: ``state``, or the perceiver of rgbd episodes).
     Parsed lines (dicts) are loaded as records first (:func:`capmj.bench.migrate.as_record`).
     """
     recs = [as_record(r) for r in records]
@@ -311,12 +312,15 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
     for r in recs:
         cfg = config_of(r)
         label = label_of(r) if label_of else default_label(*cfg)
-        configs.setdefault(label, {"agent": cfg[0], "model": cfg[1]})
+        configs.setdefault(label, {"agent": cfg[0], "model": cfg[1], "perception": set()})["perception"].add(
+            r.perception.perceiver if r.perception is not None else "state")
         t = r.task
         if t not in tasks:
             tasks.append(t)
         by.setdefault(t, {}).setdefault(label, []).append(r)
         overall.setdefault(label, []).append(r)
+    for c in configs.values():
+        c["perception"] = ", ".join(sorted(c["perception"]))
     return {
         "schema": SUMMARY_SCHEMA,
         "configs": configs,
