@@ -37,14 +37,16 @@ from capmj.agents.footprints import Disc, Footprints, Part, Rect
 from capmj.agents.perception_audit import PerceptionAudit
 from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
+from capmj.perception.plugins import BUILTIN, STATE, load_perceiver
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL, ObjectSpec
 from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose
 
-PERCEPTION_MODES: tuple[str, ...] = ("state", "rgbd")
-"""``state``: the API reads the simulator (the default); ``rgbd``: it reads the cameras."""
+PERCEPTION_MODES: tuple[str, ...] = (STATE, *BUILTIN)
+"""capmj's own modes — ``state``: the API reads the simulator (the default); ``rgbd``: it reads the
+cameras through the built-in perceiver.  Plugins add more (:func:`capmj.perception.plugins.perception_modes`)."""
 
 
 class PerceivedScene:
@@ -189,12 +191,12 @@ class PerceivedAPI(PlannerAPI):
 
 
 def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:
-    """The planner API of an episode in a perception mode (:data:`PERCEPTION_MODES`)."""
-    if perception == "state":
+    """The planner API of an episode in a perception mode: ``state`` or the name of a perceiver
+    (built-in or a ``capmj.perceivers`` plugin, :mod:`capmj.perception.plugins`); an unknown name
+    is a ConfigError listing the valid ones."""
+    if perception == STATE:
         return PlannerAPI(ctx)
-    if perception == "rgbd":
-        return PerceivedAPI(ctx)
-    raise ValueError(f"unknown perception mode {perception!r}; valid modes: {', '.join(PERCEPTION_MODES)}")
+    return PerceivedAPI(ctx, load_perceiver(perception), name=perception)
 
 
 __all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "PerceivingContext", "make_api"]

@@ -42,6 +42,7 @@ from dm_env import specs
 
 from capmj.agents.base import Budget, EpisodeContext
 from capmj.errors import AgentError, BudgetExceeded, ConfigError
+from capmj.perception.plugins import STATE, check_mode, load_perceiver
 from capmj.records import PerceptionNotes
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.objects import BLOCK_SIZES, KINDS
@@ -59,8 +60,6 @@ ACTION_LOW = np.array([WORKSPACE.xmin, WORKSPACE.ymin, WORKSPACE.zmin, -math.pi]
 ACTION_HIGH = np.array([WORKSPACE.xmax, WORKSPACE.ymax, WORKSPACE.zmax, math.pi])
 FAR_DEPTH = 5.0
 """Depth of pixels that see nothing (the scene's far plane, metres)."""
-PERCEPTION_MODES = ("state", "rgbd")
-"""Where the ``objects`` observation comes from: the simulator or the cameras."""
 MAX_OBJECTS = 32
 """Rows of the ``objects`` observation (the largest scene of the built-in tasks has 17 objects)."""
 OBJECT_FIELDS = ("obj_id", "kind", "color", "size", "x", "y", "z", "yaw")
@@ -84,11 +83,11 @@ class EnvConfig:
     robot_meshes: bool = True
     max_steps: int | None = None
     perception: str = "state"
-    """What the ``objects`` observation reads: ``state`` (the simulator) or ``rgbd`` (the cameras)."""
+    """What the ``objects`` observation reads: ``state`` (the simulator), ``rgbd`` (the cameras) or
+    another perceiver's name (:mod:`capmj.perception.plugins`)."""
 
     def __post_init__(self) -> None:
-        if self.perception not in PERCEPTION_MODES:
-            raise ConfigError(f"unknown perception mode {self.perception!r}; valid modes: {', '.join(PERCEPTION_MODES)}")
+        check_mode(self.perception)
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"image size must be positive, got {self.width}x{self.height}")
         if self.max_steps is not None and self.max_steps < 1:
@@ -197,12 +196,12 @@ class TabletopEnv(dm_env.Environment):
         self.world.settle()
         self._ctx = EpisodeContext(self.task, self.seed, self.scene, self.world,
                                    budget=Budget(max_primitives=self.max_steps))
-        if self.config.perception == "rgbd":
+        if self.config.perception != STATE:
             from capmj.agents.perceived import PerceivedScene, PerceivingContext
             from capmj.agents.perception_audit import PerceptionAudit
 
-            audit = PerceptionAudit(self._ctx, "rgbd")
-            self._perceived = PerceivedScene(self.world, observer=audit.observe)
+            audit = PerceptionAudit(self._ctx, self.config.perception)
+            self._perceived = PerceivedScene(self.world, load_perceiver(self.config.perception), observer=audit.observe)
             self._seen = PerceivingContext(self._ctx, self._perceived, audit)
         self.steps, self._done, self.last_result = 0, False, None
         self.verdict = self.task.evaluate(self.scene, self.world.state())
