@@ -81,15 +81,16 @@ class PerceptionAudit:
 
     def pick_missed(self, held: int | None, pick: Sequence[float] | np.ndarray, gripped_true: int | None) -> bool:
         """Whether a pick missed because of perception: the plan meant perceived object ``held``,
-        the primitive did not grip that object (``gripped_true``: the true obj_id it gripped), and
-        the pick point ``pick`` lay off it (farther than the tolerance from its true centre in xy)
-        or ``held`` matches no true object at all.  Recorded in the notes when it did."""
+        the primitive did not grip that object (``gripped_true``: the true obj_id it gripped, None
+        for nothing), and the pick point ``pick`` lay off it (farther than the tolerance from its
+        true centre in xy) — or ``held`` matches no true object and nothing was gripped.  Recorded
+        in the notes when it did."""
         self._moves += 1
         if held is None:
             return False  # a pick at a bare position: the plan chose the point, not perception
         target = self._truth_of.get(held)
-        if target is not None and gripped_true == target:
-            return False
+        if gripped_true == target if target is not None else gripped_true is not None:
+            return False  # it gripped the object meant (or, meaning one not there, gripped a real one)
         xy = self._true_xy.get(target) if target is not None else None
         off = xy is None or 1000 * math.dist((float(pick[0]), float(pick[1])), xy) > POSITION_TOL_MM
         if off:
