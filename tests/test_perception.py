@@ -127,6 +127,50 @@ def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     assert fit.mismatch < 0.05
 
 
+# ---------------------------------------------------------------------- fast paths = plain formulations
+def _plain_view_points(view):
+    """The back-projection and normals written plainly, on (H, W, 3) arrays (the fast code's reference)."""
+    from capmj.perception.cloud import _DEPTH_FAR, UPRIGHT_COS, Z_MAX
+    from capmj.sim.bounds import WORKSPACE as ws
+
+    k, pose = view.intrinsics, view.extrinsics
+    h, w = view.shape
+    rot = pose[:3, :3].astype(np.float32)
+    a = ((np.arange(w) + 0.5 - k[0, 2]) / k[0, 0]).astype(np.float32)
+    b = ((np.arange(h) + 0.5 - k[1, 2]) / k[1, 1]).astype(np.float32)
+    rays = a[None, :, None] * rot[:, 0] + b[:, None, None] * rot[:, 1] + rot[:, 2]
+    pts = view.depth[..., None] * rays + pose[:3, 3].astype(np.float32)
+    x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
+    keep = ((view.depth < _DEPTH_FAR) & (x >= ws.xmin) & (x < ws.xmax) & (y >= ws.ymin) & (y < ws.ymax)
+            & (z > -0.01) & (z < Z_MAX))
+    keep[-1, :] = keep[:, -1] = False
+    kv, ku = np.nonzero(keep)
+    p0 = pts[kv, ku]
+    du, dv = pts[kv, ku + 1] - p0, pts[kv + 1, ku] - p0
+    n = np.stack([du[:, 1] * dv[:, 2] - du[:, 2] * dv[:, 1], du[:, 2] * dv[:, 0] - du[:, 0] * dv[:, 2],
+                  du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]], axis=1)
+    n2 = n[:, 0] * n[:, 0] + n[:, 1] * n[:, 1] + n[:, 2] * n[:, 2]
+    step2 = np.maximum((du * du).sum(axis=1), (dv * dv).sum(axis=1))
+    up = (n[:, 2] * n[:, 2] > UPRIGHT_COS ** 2 * n2) & (n2 > 0) & (step2 < 0.006 ** 2)
+    return p0.astype(np.float64), view.rgb[kv, ku], up
+
+
+def test_fast_fusion_paths_give_the_bits_of_the_plain_ones() -> None:
+    from capmj.perception.cloud import _view_points
+    from capmj.perception.colour import _lab, _median_u8, srgb_to_lab
+
+    bundle, _ = _render(_spawn("put-block-into-matching-bowl", 10001))
+    for view in bundle.views:
+        for fast, plain in zip(_view_points(view), _plain_view_points(view)):
+            assert fast.dtype == plain.dtype and np.array_equal(fast, plain), view.name
+    rng = np.random.default_rng(7)
+    for n in (4097, 10000, 10001):
+        px = rng.integers(0, 256, (n, 3)).astype(np.uint8)
+        assert np.array_equal(_median_u8(px), np.median(px.astype(np.float64), axis=0))
+        few = px[rng.integers(0, 300, n)]  # many pixels, few distinct colours, as in a render
+        assert np.array_equal(srgb_to_lab(few), _lab(few)) and np.array_equal(srgb_to_lab(px), _lab(px))
+
+
 # ---------------------------------------------------------------------- accuracy against the truth
 def _truths(truth) -> list:
     from capmj.perception.score import TrueObject
