@@ -19,7 +19,6 @@ import pytest
 
 from capmj.perception import ClassicalPerceiver, RGBDBundle
 from capmj.perception.footprint import fit_l, min_area_rect, square_yaw
-from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -113,12 +112,28 @@ def test_min_area_rect_recovers_a_rotated_rectangle(angle: float) -> None:
     assert math.remainder(square_yaw(square) - angle, math.pi / 2) == pytest.approx(0.0, abs=1e-6)
 
 
+def _file_walls() -> list:
+    """((centre x, y), half x, half y) of the walls as ``mjcf/fixture.xml`` has them (geoms g0, g1)."""
+    import mujoco
+
+    from capmj.resources import packaged
+
+    m = mujoco.MjModel.from_xml_path(str(packaged("mjcf") / "fixture.xml"))
+    walls = [m.geom(name) for name in ("g0", "g1")]
+    return [((float(g.pos[0]), float(g.pos[1])), float(g.size[0]), float(g.size[1])) for g in walls]
+
+
+def test_fixture_walls_of_the_perceiver_are_those_of_the_file() -> None:
+    from capmj.perception.footprint import FIXTURE_WALLS
+
+    for (c, hx, hy), (fc, fhx, fhy) in zip(FIXTURE_WALLS, _file_walls(), strict=True):
+        assert c == pytest.approx(fc, abs=1e-9) and (hx, hy) == pytest.approx((fhx, fhy), abs=1e-9)
+
+
 @pytest.mark.parametrize("yaw", [0.0, 0.8, 2.5, -2.0])
 def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     # The walls of mjcf/fixture.xml in the fixture's frame, then turned by yaw about the origin (0.5, 0.1).
-    long_wall = _rect_points(0.02, -0.025, FIXTURE_LONG, FIXTURE_WALL, 0.0, 0.002)
-    short_wall = _rect_points(-0.025, 0.005, FIXTURE_WALL, FIXTURE_SHORT, 0.0, 0.002)
-    local = np.concatenate([long_wall, short_wall])
+    local = np.concatenate([_rect_points(x, y, 2 * hx, 2 * hy, 0.0, 0.002) for (x, y), hx, hy in _file_walls()])
     c, s = math.cos(yaw), math.sin(yaw)
     xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
     fit = fit_l(xy, min_area_rect(xy), 0.002)

@@ -37,10 +37,11 @@ from capmj.agents.footprints import Disc, Footprints, Part, Rect
 from capmj.agents.perception_audit import PerceptionAudit
 from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
+from capmj.perception.footprint import FIXTURE_WALLS
 from capmj.perception.plugins import BUILTIN, STATE, load_perceiver
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
-from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL, ObjectSpec
+from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose
 
@@ -122,9 +123,7 @@ class PerceivedScene:
             return [Disc(x, y, (d.aabb[1][0] - d.aabb[0][0]) / 2)]
         if d.kind == "fixture":
             c, s = math.cos(d.yaw), math.sin(d.yaw)
-            walls = (((0.02, -0.025), FIXTURE_LONG / 2, FIXTURE_WALL / 2),
-                     ((-0.025, 0.005), FIXTURE_WALL / 2, FIXTURE_SHORT / 2))  # mjcf/fixture.xml
-            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in walls]
+            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in FIXTURE_WALLS]
         half = (d.aabb[1][2] - d.aabb[0][2]) / 2 if d.kind == "block" else 0.06 * d.scale
         return [Rect(x, y, d.yaw, half, half)]
 
