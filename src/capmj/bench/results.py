@@ -301,7 +301,7 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
     A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
     per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
     :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for and what
-    its planner API read (``perception``: ``state``, or the perceiver of rgbd episodes).
+    its planner API read (``perception``: the perceiver of rgbd episodes; absent for the simulator).
     Parsed lines (dicts) are loaded as records first (:func:`capmj.bench.migrate.as_record`).
     """
     recs = [as_record(r) for r in records]
@@ -319,8 +319,10 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
             tasks.append(t)
         by.setdefault(t, {}).setdefault(label, []).append(r)
         overall.setdefault(label, []).append(r)
-    for c in configs.values():
-        c["perception"] = ", ".join(sorted(c["perception"]))
+    for c in configs.values():  # state-only configurations keep the shape summaries always had
+        seen = c.pop("perception") - {"state"}
+        if seen:
+            c["perception"] = ", ".join(sorted(seen))
     return {
         "schema": SUMMARY_SCHEMA,
         "configs": configs,
