@@ -31,20 +31,11 @@ import numpy as np
 from capmj.tasks.registry import resolve
 
 
-def _truth(world) -> list:
-    from capmj.perception.score import TrueObject
-
-    out = []
-    for o in world.objects:
-        pose = world.pose(o.obj_id)
-        out.append(TrueObject(o.kind, o.color, o.size, tuple(float(v) for v in pose.pos), float(pose.yaw)))
-    return out
-
-
 def run_scene(task_name: str, seed: int, states: tuple[str, ...]) -> list[dict]:
     """Score the perceiver on one scene in each requested state."""
     from capmj.agents.base import EpisodeContext
     from capmj.agents.oracle import OracleAgent
+    from capmj.agents.perception_audit import true_objects
     from capmj.perception import ClassicalPerceiver, RGBDBundle
     from capmj.perception.score import score
     from capmj.sim.cameras import CameraRig
@@ -71,7 +62,7 @@ def run_scene(task_name: str, seed: int, states: tuple[str, ...]) -> list[dict]:
             wall, cpu = time.perf_counter(), time.process_time()
             detections = perceiver.perceive(bundle)
             wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-            truth = _truth(world)
+            _, truth = true_objects(world)
             s = score(detections, truth)
             rows.append({"task": task_name, "seed": seed, "state": state, "wall_s": wall, "cpu_s": cpu,
                          **s.to_dict(),

@@ -60,7 +60,11 @@ def test_gymnasium_env_checker_passes() -> None:
     assert isinstance(obs["goal"], str) and obs["goal"] in env.observation_space["goal"]
     assert info["seed"] == 7 and obs["color"].shape == (1, 24, 32, 3)
     assert np.array_equal(env.render(), obs["color"][0])
+    assert obs["objects"].shape == (32, 8) and obs["objects"][0, 0] > 0
     env.close()
+    rgbd = gymnasium.make(env_id("stack-all-blocks-on-a-zone"), perception="rgbd")
+    assert rgbd.unwrapped.dm_env.config.perception == "rgbd"  # the keyword reaches the dm_env
+    rgbd.close()
 
 
 def test_gymnasium_ids_are_registered_on_request_or_by_the_module_id_form() -> None:
@@ -131,12 +135,43 @@ def test_same_seed_same_episode_and_seed_sequence() -> None:
     assert len(a) == len(b) >= 2
     for x, y in zip(a, b):
         np.testing.assert_equal(x, y)
-    assert set(a[0]) == {"color", "depth", "segmentation", "heightmap", "colormap", "goal", "joint_pos", "tip_pose",
-                         "suction"}
+    assert set(a[0]) == {"color", "depth", "segmentation", "heightmap", "colormap", "objects", "goal", "joint_pos",
+                         "tip_pose", "suction"}
     assert a[0]["segmentation"].dtype == np.int32 and a[0]["segmentation"].max() > 0
     row, col = int((block[1] + 0.5) / 0.003125), int((block[0] - 0.25) / 0.003125)
     assert a[0]["heightmap"].shape == (320, 160)
     assert a[0]["heightmap"][row, col] == pytest.approx(2 * block[2], abs=0.005)  # the block's top
+
+
+def _rows(objects: np.ndarray) -> list[tuple[int, int, int, tuple[float, ...]]]:
+    """(kind, colour, size, (x, y, z)) of the present rows of an ``objects`` observation, sorted."""
+    return sorted((int(r[1]), int(r[2]), int(r[3]), tuple(r[4:7])) for r in objects if r[0] > 0)
+
+
+def test_rgbd_env_perceives_the_objects_and_acts_in_the_same_physics() -> None:
+    """The same oracle actions in a state env and an rgbd env: bit-identical physics (perception
+    only renders), and the perceived ``objects`` agree with the simulator's after every step."""
+    task, seed = "stack-all-blocks-on-a-zone", 10003
+    with pytest.raises(ConfigError, match="valid modes: state, rgbd"):
+        EnvConfig(perception="lidar")
+    traces = {}
+    for mode in ("state", "rgbd"):
+        env = TabletopEnv(task, seed=seed, config=EnvConfig(cameras=()), perception=mode)
+        obs = [env.reset().observation["objects"]]
+        assert run_oracle(env, lambda action, ts, obs=obs: obs.append(ts.observation["objects"])) is None and env.success
+        traces[mode] = (obs, env.world.snapshot().physics, env.perception)
+        env.close()
+    (state_obs, state_phys, none), (rgbd_obs, rgbd_phys, notes) = traces["state"], traces["rgbd"]
+    assert none is None and np.array_equal(state_phys, rgbd_phys)
+    assert len(state_obs) == len(rgbd_obs) >= 3
+    for truth, seen in zip(state_obs, rgbd_obs):
+        t, p = _rows(truth), _rows(seen)
+        assert [r[:3] for r in t] == [r[:3] for r in p]  # every object, right kind, colour, size
+        assert max(float(np.linalg.norm(np.subtract(a[3], b[3]))) for a, b in zip(t, p)) < 0.005
+    ids = [sorted(int(r[0]) for r in o if r[0] > 0) for o in rgbd_obs]
+    assert all(i == ids[0] for i in ids)  # ids kept across moves (a tower hides its lower blocks)
+    assert notes is not None and [c.stage for c in notes.calls][:2] == ["reset", "move 1"]
+    assert len(notes.calls) == len(rgbd_obs) and not any(c.missed or c.false_detections for c in notes.calls)
 
 
 def test_bad_actions_are_named() -> None:

@@ -19,7 +19,6 @@ import pytest
 
 from capmj.perception import ClassicalPerceiver, RGBDBundle
 from capmj.perception.footprint import fit_l, min_area_rect, square_yaw
-from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -113,18 +112,78 @@ def test_min_area_rect_recovers_a_rotated_rectangle(angle: float) -> None:
     assert math.remainder(square_yaw(square) - angle, math.pi / 2) == pytest.approx(0.0, abs=1e-6)
 
 
+def _file_walls() -> list:
+    """((centre x, y), half x, half y) of the walls as ``mjcf/fixture.xml`` has them (geoms g0, g1)."""
+    import mujoco
+
+    from capmj.resources import packaged
+
+    m = mujoco.MjModel.from_xml_path(str(packaged("mjcf") / "fixture.xml"))
+    walls = [m.geom(name) for name in ("g0", "g1")]
+    return [((float(g.pos[0]), float(g.pos[1])), float(g.size[0]), float(g.size[1])) for g in walls]
+
+
+def test_fixture_walls_of_the_perceiver_are_those_of_the_file() -> None:
+    from capmj.perception.footprint import FIXTURE_WALLS
+
+    for (c, hx, hy), (fc, fhx, fhy) in zip(FIXTURE_WALLS, _file_walls(), strict=True):
+        assert c == pytest.approx(fc, abs=1e-9) and (hx, hy) == pytest.approx((fhx, fhy), abs=1e-9)
+
+
 @pytest.mark.parametrize("yaw", [0.0, 0.8, 2.5, -2.0])
 def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     # The walls of mjcf/fixture.xml in the fixture's frame, then turned by yaw about the origin (0.5, 0.1).
-    long_wall = _rect_points(0.02, -0.025, FIXTURE_LONG, FIXTURE_WALL, 0.0, 0.002)
-    short_wall = _rect_points(-0.025, 0.005, FIXTURE_WALL, FIXTURE_SHORT, 0.0, 0.002)
-    local = np.concatenate([long_wall, short_wall])
+    local = np.concatenate([_rect_points(x, y, 2 * hx, 2 * hy, 0.0, 0.002) for (x, y), hx, hy in _file_walls()])
     c, s = math.cos(yaw), math.sin(yaw)
     xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
     fit = fit_l(xy, min_area_rect(xy), 0.002)
     assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
     assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     assert fit.mismatch < 0.05
+
+
+# ---------------------------------------------------------------------- fast paths = plain formulations
+def _plain_view_points(view):
+    """The back-projection and normals written plainly, on (H, W, 3) arrays (the fast code's reference)."""
+    from capmj.perception.cloud import _DEPTH_FAR, UPRIGHT_COS, Z_MAX
+    from capmj.sim.bounds import WORKSPACE as ws
+
+    k, pose = view.intrinsics, view.extrinsics
+    h, w = view.shape
+    rot = pose[:3, :3].astype(np.float32)
+    a = ((np.arange(w) + 0.5 - k[0, 2]) / k[0, 0]).astype(np.float32)
+    b = ((np.arange(h) + 0.5 - k[1, 2]) / k[1, 1]).astype(np.float32)
+    rays = a[None, :, None] * rot[:, 0] + b[:, None, None] * rot[:, 1] + rot[:, 2]
+    pts = view.depth[..., None] * rays + pose[:3, 3].astype(np.float32)
+    x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
+    keep = ((view.depth < _DEPTH_FAR) & (x >= ws.xmin) & (x < ws.xmax) & (y >= ws.ymin) & (y < ws.ymax)
+            & (z > -0.01) & (z < Z_MAX))
+    keep[-1, :] = keep[:, -1] = False
+    kv, ku = np.nonzero(keep)
+    p0 = pts[kv, ku]
+    du, dv = pts[kv, ku + 1] - p0, pts[kv + 1, ku] - p0
+    n = np.stack([du[:, 1] * dv[:, 2] - du[:, 2] * dv[:, 1], du[:, 2] * dv[:, 0] - du[:, 0] * dv[:, 2],
+                  du[:, 0] * dv[:, 1] - du[:, 1] * dv[:, 0]], axis=1)
+    n2 = n[:, 0] * n[:, 0] + n[:, 1] * n[:, 1] + n[:, 2] * n[:, 2]
+    step2 = np.maximum((du * du).sum(axis=1), (dv * dv).sum(axis=1))
+    up = (n[:, 2] * n[:, 2] > UPRIGHT_COS ** 2 * n2) & (n2 > 0) & (step2 < 0.006 ** 2)
+    return p0.astype(np.float64), view.rgb[kv, ku], up
+
+
+def test_fast_fusion_paths_give_the_bits_of_the_plain_ones() -> None:
+    from capmj.perception.cloud import _view_points
+    from capmj.perception.colour import _lab, _median_u8, srgb_to_lab
+
+    bundle, _ = _render(_spawn("put-block-into-matching-bowl", 10001))
+    for view in bundle.views:
+        for fast, plain in zip(_view_points(view), _plain_view_points(view)):
+            assert fast.dtype == plain.dtype and np.array_equal(fast, plain), view.name
+    rng = np.random.default_rng(7)
+    for n in (4097, 10000, 10001):
+        px = rng.integers(0, 256, (n, 3)).astype(np.uint8)
+        assert np.array_equal(_median_u8(px), np.median(px.astype(np.float64), axis=0))
+        few = px[rng.integers(0, 300, n)]  # many pixels, few distinct colours, as in a render
+        assert np.array_equal(srgb_to_lab(few), _lab(few)) and np.array_equal(srgb_to_lab(px), _lab(px))
 
 
 # ---------------------------------------------------------------------- accuracy against the truth

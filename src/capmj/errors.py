@@ -113,6 +113,13 @@ class MotionFailed(AgentError, RuntimeError):
         self.status = status
 
 
+class PerceptionFailed(MotionFailed):
+    """A pick-and-place missed because perception put the object elsewhere than it is (the
+    perceived pick point lies off the object the plan named, or at an object that is not there;
+    ``--perception rgbd``).  The robot sees only the miss, so the text is the motion failure's; the
+    class, recorded as ``error_type``, tells failure attribution that perception caused it."""
+
+
 class UnknownObjectError(AgentError, ValueError):
     """Plan code named an object (or obj_id) the scene does not have.  A ``ValueError`` too, as it
     always was.  ``name`` is the name (or id) as the code wrote it, when known."""

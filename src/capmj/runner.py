@@ -17,7 +17,7 @@ from capmj.agents.attribution import final_poses, placement_drift
 from capmj.agents.base import Agent, Budget, EpisodeContext
 from capmj.errors import EvaluationFailed, describe, error_facts
 from capmj.record import ArrayFrames, NullRecorder, Recorder
-from capmj.records import Drift, EpisodeResult, LLMNotes
+from capmj.records import Drift, EpisodeResult, LLMNotes, PerceptionNotes
 from capmj.sim.world import World
 from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import Task, make_scene
@@ -87,6 +87,7 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
     llm = ctx.notes.get("llm")
+    perception = ctx.notes.get("perception")  # rgbd mode: capmj.agents.perception_audit
     poses: dict[str, tuple[float, ...]]
     drift: Drift | None
     try:
@@ -98,7 +99,8 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     return EpisodeResult(name, seed, agent.name, model, success, progress, float(reward), ctx.total_primitives,
                          ctx.attempt + 1, world.time, time.perf_counter() - t0, error, scene.goal, tuple(diags),
                          llm if isinstance(llm, LLMNotes) else None, final_poses=poses, drift=drift,
-                         error_type=error_type, error_status=status, calls=tuple(ctx.notes.get("llm_calls", ())))
+                         error_type=error_type, error_status=status, calls=tuple(ctx.notes.get("llm_calls", ())),
+                         perception=perception if isinstance(perception, PerceptionNotes) else None)
 
 
 def _oracle_goals(task: Any, seed: int) -> tuple:

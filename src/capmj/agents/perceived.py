@@ -16,28 +16,38 @@ theirs (:class:`capmj.perception.track.Tracker`).
 
 The primitive reports which object it gripped by its simulator id; the robot only knows that it
 gripped something, so the result is translated to the perceived object at the pick point.
+
+Beside the API runs a :class:`~capmj.agents.perception_audit.PerceptionAudit`: it scores every
+view against the truth for the episode's record (never feeding anything back into perception),
+and tells the API when a failed pick missed because the perceived point was off the object, so
+that the failure is raised as :class:`~capmj.errors.PerceptionFailed` (same text, its own class).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.footprints import Disc, Footprints, Part, Rect
+from capmj.agents.perception_audit import PerceptionAudit
+from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
+from capmj.perception.footprint import FIXTURE_WALLS
+from capmj.perception.plugins import BUILTIN, STATE, load_perceiver
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
-from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL, ObjectSpec
+from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose
 
-PERCEPTION_MODES: tuple[str, ...] = ("state", "rgbd")
-"""``state``: the API reads the simulator (the default); ``rgbd``: it reads the cameras."""
+PERCEPTION_MODES: tuple[str, ...] = (STATE, *BUILTIN)
+"""capmj's own modes — ``state``: the API reads the simulator (the default); ``rgbd``: it reads the
+cameras through the built-in perceiver.  Plugins add more (:func:`capmj.perception.plugins.perception_modes`)."""
 
 
 class PerceivedScene:
@@ -47,14 +57,22 @@ class PerceivedScene:
     ``objects_by_id``, ``pose``, ``aabb``, ``top_z``, ``time``), answered from perception.
     """
 
-    def __init__(self, world: Any, perceiver: Perceiver | None = None) -> None:
+    def __init__(self, world: Any, perceiver: Perceiver | None = None,
+                 observer: Callable[[Tracker], None] | None = None) -> None:
         from capmj.sim.cameras import CameraRig
 
         self._world = world
         self._perceiver: Perceiver = perceiver or ClassicalPerceiver()
+        self._observer = observer
+        """Called with each new tracker (the audit scoring it for the record)."""
         self._rig = CameraRig(world)
         self.calls = 0
         self.tracker = Tracker.start(self._perceive())
+        self._observed()
+
+    def _observed(self) -> None:
+        if self._observer is not None:
+            self._observer(self.tracker)
 
     def _perceive(self) -> tuple:
         frames = [self._rig.render(name, seg=False, include_robot=False) for name in self._rig.camera_names]
@@ -64,6 +82,7 @@ class PerceivedScene:
     def refresh(self, moved: dict[int, tuple[float, float, float]]) -> None:
         """Perceive again after the robot moved the objects in ``moved`` (id -> where it put them)."""
         self.tracker = self.tracker.update(self._perceive(), moved)
+        self._observed()
 
     def close(self) -> None:
         self._rig.close()
@@ -104,9 +123,7 @@ class PerceivedScene:
             return [Disc(x, y, (d.aabb[1][0] - d.aabb[0][0]) / 2)]
         if d.kind == "fixture":
             c, s = math.cos(d.yaw), math.sin(d.yaw)
-            walls = (((0.02, -0.025), FIXTURE_LONG / 2, FIXTURE_WALL / 2),
-                     ((-0.025, 0.005), FIXTURE_WALL / 2, FIXTURE_SHORT / 2))  # mjcf/fixture.xml
-            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in walls]
+            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in FIXTURE_WALLS]
         half = (d.aabb[1][2] - d.aabb[0][2]) / 2 if d.kind == "block" else 0.06 * d.scale
         return [Rect(x, y, d.yaw, half, half)]
 
@@ -114,13 +131,16 @@ class PerceivedScene:
         return Footprints(lambda: self.objects, self.pose, self.aabb, self.top_z, self.geom_parts)
 
 
-class _PerceivingContext:
+class PerceivingContext:
     """The episode context as the perceived API uses it: every pick-and-place is followed by a
     fresh perception, and the gripped object is named by perception, not by the simulator."""
 
-    def __init__(self, ctx: EpisodeContext, scene: PerceivedScene) -> None:
+    def __init__(self, ctx: EpisodeContext, scene: PerceivedScene, audit: PerceptionAudit) -> None:
         self._ctx = ctx
         self._scene = scene
+        self._audit = audit
+        self.missed = False
+        """Whether the latest pick missed because of perception (:meth:`PerceptionAudit.pick_missed`)."""
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._ctx, name)
@@ -128,6 +148,7 @@ class _PerceivingContext:
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
         held = self._held_at(pick)
         res = self._ctx.pick_and_place(pick, place, place_yaw)
+        self.missed = self._audit.pick_missed(held, pick, res.obj_id if res.ok else None)
         gripped = held if res.obj_id is not None else None
         moved = {held: tuple(float(v) for v in place)} if res.ok and held is not None else {}
         self._scene.refresh(moved)  # type: ignore[arg-type]
@@ -148,21 +169,33 @@ class _PerceivingContext:
 class PerceivedAPI(PlannerAPI):
     """The planner API over :class:`PerceivedScene` (see the module docstring)."""
 
-    def __init__(self, ctx: EpisodeContext, perceiver: Perceiver | None = None) -> None:
+    def __init__(self, ctx: EpisodeContext, perceiver: Perceiver | None = None, name: str = "rgbd") -> None:
         super().__init__(ctx)
-        self.scene = PerceivedScene(ctx.world, perceiver)
+        audit = PerceptionAudit(ctx, name)
+        self.scene = PerceivedScene(ctx.world, perceiver, observer=audit.observe)
         self._world = self.scene  # type: ignore[assignment]
-        self._ctx = _PerceivingContext(ctx, self.scene)  # type: ignore[assignment]
+        self._perceiving = PerceivingContext(ctx, self.scene, audit)
+        self._ctx = self._perceiving  # type: ignore[assignment]
         self._footprints = self.scene.footprints()
+
+    def _put(self, obj: Any, target: Any) -> None:
+        """The API's pick-and-place; a miss perception caused is a :class:`PerceptionFailed`."""
+        self._perceiving.missed = False
+        try:
+            super()._put(obj, target)
+        except MotionFailed as exc:
+            if self._perceiving.missed:
+                raise PerceptionFailed(str(exc), status=exc.status) from exc
+            raise
 
 
 def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:
-    """The planner API of an episode in a perception mode (:data:`PERCEPTION_MODES`)."""
-    if perception == "state":
+    """The planner API of an episode in a perception mode: ``state`` or the name of a perceiver
+    (built-in or a ``capmj.perceivers`` plugin, :mod:`capmj.perception.plugins`); an unknown name
+    is a ConfigError listing the valid ones."""
+    if perception == STATE:
         return PlannerAPI(ctx)
-    if perception == "rgbd":
-        return PerceivedAPI(ctx)
-    raise ValueError(f"unknown perception mode {perception!r}; valid modes: {', '.join(PERCEPTION_MODES)}")
+    return PerceivedAPI(ctx, load_perceiver(perception), name=perception)
 
 
-__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "make_api"]
+__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "PerceivingContext", "make_api"]

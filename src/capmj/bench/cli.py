@@ -70,6 +70,16 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
+def _perception_mode(name: str) -> str:
+    """A valid ``--perception`` value (the error lists them: state, rgbd and any plugins)."""
+    from capmj.perception.plugins import check_mode
+
+    try:
+        return check_mode(name)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m capmj.bench", description="Run a grid of capmj episodes (tasks × seeds) "
                 "with one agent, write episodes.jsonl and summary tables.", epilog=EPILOG,
@@ -80,9 +90,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"seeds as a list '1,3,5' and/or ranges 'start:stop[:step]' (stop excluded); "
                         f"default: the test split {TEST_SEEDS} (50 odd seeds from 10001)")
     p.add_argument("--agent", default=None, help="agent: oracle (default), reference, llm")
-    p.add_argument("--perception", default=None, choices=("state", "rgbd"),
+    p.add_argument("--perception", default=None, type=_perception_mode, metavar="MODE",
                    help="what the planner API of the reference and llm agents reads: the simulator (state, "
-                        "default) or the cameras (rgbd; see docs/perception.md)")
+                        "default), the cameras (rgbd), or a perceiver plugin by name (capmj.perceivers entry "
+                        "points; see docs/perception.md)")
     g = p.add_argument_group("LLM agent options (passed to the agent; see docs/llm.md)")
     add_llm_options(g)  # --model, --api-base, --temperature, --llm-timeout, --llm-max-tokens, --llm-cache
     g.add_argument("--reporter", default=None, choices=("none", "text", "vlm"), help="completion reporter")

@@ -14,12 +14,16 @@ documented with examples in ``docs/failures.md``; in short:
    failed, whatever the kind), else by the class of the error (``error_type``, recorded per
    attempt and per episode by :func:`capmj.errors.error_facts`; never by its message): ``no_code``, ``syntax``, ``sandbox_violation``,
    ``budget`` (wall time, lines, elements, API calls, primitives, simulation steps),
-   ``unknown_object``, ``motion`` (unreachable / no grip / wrong object picked), ``api_misuse``
+   ``unknown_object``, ``perception`` (a pick missed because the perceived point lay off the
+   object, ``PerceptionFailed``; rgbd mode), ``motion`` (unreachable / no grip / wrong object picked), ``api_misuse``
    (an API function rejected its arguments), ``plan_exception`` (the plan's own code raised).
    A last attempt whose plan was not run (identical to attempt j's, see docs/llm.md) is classified
    as attempt j, where its episode ended.
 6. The last attempt ran cleanly but the predicate is false:
    ``reporter_false_positive`` when the reporter's "achieved" ended the loop with attempts left,
+   ``perception`` when the episode read the cameras and the last attempt acted on a view that got
+   an object wrong or picked off target (:meth:`capmj.records.PerceptionNotes.erred`: a missed or
+   false object, a wrong kind / colour / size, a centre more than 10 mm off),
    ``physics`` when an object the last attempt placed ended more than :data:`DRIFT_TOL_M` from
    where its pick-and-place put it (a tower fell, a block slid off), else ``wrong_plan``.
 
@@ -40,6 +44,7 @@ from capmj.errors import (
     LLMError,
     MotionFailed,
     NoCodeError,
+    PerceptionFailed,
     PlanSyntaxError,
     PortingDifference,
     SandboxViolation,
@@ -52,7 +57,7 @@ __all__ = ["DRIFT_TOL_M", "LABELS", "breakdown", "classify", "failure_of"]
 
 LABELS: tuple[str, ...] = (
     "no_code", "syntax", "sandbox_violation", "budget", "unknown_object", "api_misuse", "plan_exception",
-    "helper_lmp", "motion", "physics", "wrong_plan", "reporter_false_positive", "reporter_false_negative",
+    "helper_lmp", "perception", "motion", "physics", "wrong_plan", "reporter_false_positive", "reporter_false_negative",
     "llm_error", "infrastructure",
 )
 """Every label :func:`classify` can return, in the order tables show them."""
@@ -84,9 +89,15 @@ def _error_label(error_type: str | None, attempt: AttemptRecord | None) -> str:
 
 _KINDS: tuple[tuple[type[BaseException], str], ...] = (
     (NoCodeError, "no_code"), (PlanSyntaxError, "syntax"), (SandboxViolation, "sandbox_violation"),
-    (BudgetExceeded, "budget"), (MotionFailed, "motion"), (UnknownObjectError, "unknown_object"),
+    (BudgetExceeded, "budget"), (PerceptionFailed, "perception"), (MotionFailed, "motion"),
+    (UnknownObjectError, "unknown_object"),
 )
 """Error classes with a label of their own, tried in this order."""
+
+
+def _attempt_number(rec: Episode, last: AttemptRecord | None) -> int:
+    """The 1-based attempt the episode ended with (that of ``last`` for an LLM episode)."""
+    return last.attempt if last is not None else max(rec.attempts, 1)
 
 
 def classify(rec: Episode) -> str | None:
@@ -115,6 +126,8 @@ def classify(rec: Episode) -> str | None:
         return _error_label(rec.error_type, last)
     if last is not None and last.verdict is True and llm is not None and len(attempts) < (llm.max_attempts or 1):
         return "reporter_false_positive"
+    if rec.perception is not None and rec.perception.erred(_attempt_number(rec, last)):
+        return "perception"
     if rec.drift is not None and rec.drift.max_m is not None and rec.drift.max_m > DRIFT_TOL_M:
         return "physics"
     return "wrong_plan"

@@ -2,7 +2,8 @@
 
 Recorded: capmj's git revision and dirty flag (when run from a checkout), the versions of every
 package that shapes results, sha256 of every prompt file and every task plugin module used, the
-model string and the API base *host* (never a key, never the full URL's credentials), the
+model string and the API base *host* (never a key, never the full URL's credentials), what the
+planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.perceived`), the
 sandbox, simulation and LLM budgets, and ``PYTHONHASHSEED``.  :func:`differences` lists the
 manifest entries in which combined runs disagree, for ``report`` to warn about.
 """
@@ -26,7 +27,8 @@ __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "packa
 
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
-MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "budgets", "hash_seed")
+MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "perception", "budgets",
+                 "hash_seed")
 """Entries compared between runs (everything but timestamps, price and cache location)."""
 
 
@@ -126,6 +128,7 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "task_modules": _task_module_hashes(task_objects),
         "model": model,
         "api_host": f"{host}:{port}" if host and port else host,
+        "perception": getattr(agent, "perception", None) or "state",  # the oracle reads the truth
         "budgets": budgets,
         "price": _asdict(price),
         "cache_dir": str(cfg.cache_dir) if cfg is not None and cfg.cache_dir is not None else None,

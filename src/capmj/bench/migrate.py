@@ -12,7 +12,9 @@ is migrated here, then read with the record types' defaults for keys it lacks â€
 * lines of ``capmj.episode/1`` and older hold no ``error_type``/``error_status``: they are read
   from the error text by :func:`legacy_error_type` â€” the only place where capmj still parses an
   error message, kept for these old lines alone;
-* a line without a ``failure`` label (written before labels existed) is classified now.
+* a line without a ``failure`` label (written before labels existed) is classified now;
+* ``capmj.episode/2`` lines are today's without ``perception`` (every episode then read the
+  simulator): they are read as they are, with no perception record.
 
 A line with a ``schema`` this version does not know was written by a newer capmj and is refused.
 """
@@ -42,6 +44,8 @@ __all__ = ["as_record", "legacy_error_type", "load_record"]
 
 SCHEMA_V1 = "capmj.episode/1"
 """Typed records before ``error_type``/``error_status`` (otherwise today's keys)."""
+SCHEMA_V2 = "capmj.episode/2"
+"""Typed records before ``perception`` (otherwise today's keys)."""
 
 _REQUIRED_DEFAULTS: dict[str, Any] = {"model": None, "success": False, "progress": 0.0, "reward": 0.0,
                                       "primitives": 0, "attempts": 0, "sim_s": 0.0, "wall_s": 0.0, "error": None}
@@ -55,6 +59,8 @@ def load_record(data: Mapping[str, Any]) -> EpisodeRecord:
     schema = data.get("schema")
     if schema == SCHEMA:
         return EpisodeRecord.from_dict(data)
+    if schema == SCHEMA_V2:
+        return EpisodeRecord.from_dict({**data, "schema": SCHEMA})
     if schema == SCHEMA_V1:
         return EpisodeRecord.from_dict(_with_error_types({**data, "schema": SCHEMA}))
     if schema is not None:

@@ -30,12 +30,19 @@ from capmj.bench.results import (
     wilson,
     write_result_json,
 )
-from capmj.bench.sections import comparison_section, cost_section, failure_section, warnings_section
+from capmj.bench.sections import (
+    comparison_section,
+    cost_section,
+    failure_section,
+    perception_section,
+    warnings_section,
+)
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
+                 "perception")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
@@ -107,6 +114,9 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     if sources:
         out += ["Sources: " + ", ".join(f"`{s}`" for s in sources), ""]
     out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", ""]
+    seen = {lab: (c or {}).get("perception") for lab, c in (summary.get("configs") or {}).items()}
+    if any(seen.values()):  # what the planner API read: the simulator (state) or the cameras (docs/perception.md)
+        out += ["Perception: " + ", ".join(f"{lab} = {seen[lab] or 'state'}" for lab in labels if lab in seen), ""]
     if not generated:
         out += _success_table(summary, tasks, labels, "Task", None)
     else:
@@ -134,7 +144,8 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                        f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
                        f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
-    out += failure_section(summary, task_label, _order) + cost_section(summary, task_label, _order)
+    out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
+    out += cost_section(summary, task_label, _order)
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
     out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"

@@ -179,7 +179,51 @@ def stats(records: Sequence[EpisodeRecord]) -> dict[str, Any]:
     loop = loop_stats(records)
     if loop is not None:
         out["loop"] = loop
+    seen = perception_stats(records)
+    if seen is not None:
+        out["perception"] = seen
     return out
+
+
+def perception_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
+    """The perception error of rgbd episodes (``record.perception``); None without any.
+
+    ``reset`` pools each episode's first view (the scene as it starts), ``after_moves`` every view
+    taken after a pick-and-place: objects, missed and false objects, kind / colour / size errors,
+    the median of the views' median position errors and the largest error (mm).  ``erred`` counts
+    the episodes whose last attempt acted on a wrong view or picked off target
+    (:meth:`~capmj.records.PerceptionNotes.erred`), ``pick_misses`` those picks.
+    """
+    eps = [r for r in records if r.perception is not None]
+    if not eps:
+        return None
+
+    def pooled(calls: Sequence[Any]) -> dict[str, Any]:
+        medians = sorted(c.median_pos_mm for c in calls if c.median_pos_mm is not None)
+        maxima = [c.max_pos_mm for c in calls if c.max_pos_mm is not None]
+        return {"views": len(calls), "objects": sum(c.objects for c in calls),
+                "missed": sum(c.missed for c in calls), "false": sum(c.false_detections for c in calls),
+                "kind_errors": sum(c.kind_errors for c in calls), "color_errors": sum(c.color_errors for c in calls),
+                "size_errors": sum(c.size_errors for c in calls),
+                "median_pos_mm": _median(medians), "max_pos_mm": max(maxima) if maxima else None}
+
+    notes = [r.perception for r in eps if r.perception is not None]
+    return {
+        "episodes": len(eps),
+        "perceivers": sorted({n.perceiver for n in notes}),
+        "erred": sum(r.perception.erred(max(r.attempts, 1)) for r in eps if r.perception is not None),
+        "pick_misses": sum(len(n.pick_misses) for n in notes),
+        "reset": pooled([n.calls[0] for n in notes if n.calls]),
+        "after_moves": pooled([c for n in notes for c in n.calls if c.stage != "reset"]),
+    }
+
+
+def _median(sorted_values: Sequence[float]) -> float | None:
+    n = len(sorted_values)
+    if not n:
+        return None
+    mid = n // 2
+    return sorted_values[mid] if n % 2 else (sorted_values[mid - 1] + sorted_values[mid]) / 2
 
 
 def _share(k: int, n: int) -> float | None:
@@ -256,7 +300,8 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
 
     A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
     per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
-    :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for.
+    :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for and what
+    its planner API read (``perception``: the perceiver of rgbd episodes; absent for the simulator).
     Parsed lines (dicts) are loaded as records first (:func:`capmj.bench.migrate.as_record`).
     """
     recs = [as_record(r) for r in records]
@@ -267,12 +312,17 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
     for r in recs:
         cfg = config_of(r)
         label = label_of(r) if label_of else default_label(*cfg)
-        configs.setdefault(label, {"agent": cfg[0], "model": cfg[1]})
+        configs.setdefault(label, {"agent": cfg[0], "model": cfg[1], "perception": set()})["perception"].add(
+            r.perception.perceiver if r.perception is not None else "state")
         t = r.task
         if t not in tasks:
             tasks.append(t)
         by.setdefault(t, {}).setdefault(label, []).append(r)
         overall.setdefault(label, []).append(r)
+    for c in configs.values():  # state-only configurations keep the shape summaries always had
+        seen = c.pop("perception") - {"state"}
+        if seen:
+            c["perception"] = ", ".join(sorted(seen))
     return {
         "schema": SUMMARY_SCHEMA,
         "configs": configs,
@@ -297,7 +347,7 @@ def write_result_json(path: str | Path, data: Any) -> None:
 
 __all__ = [
     "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
-    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "read_records", "read_results", "sanitize",
+    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "perception_stats", "read_records", "read_results", "sanitize",
     "stats",
     "summarize",
     "wilson", "write_result_json",

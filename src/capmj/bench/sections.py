@@ -12,7 +12,7 @@ from typing import Any, Callable, Mapping
 from capmj.bench.failures import LABELS
 from capmj.bench.spend import fmt_cost
 
-__all__ = ["comparison_section", "cost_section", "failure_section", "warnings_section"]
+__all__ = ["comparison_section", "cost_section", "failure_section", "perception_section", "warnings_section"]
 
 
 def _rows(summary: Mapping[str, Any], task_label: Callable[[str], str],
@@ -39,6 +39,38 @@ def failure_section(summary: Mapping[str, Any], task_label: Callable[[str], str]
             out.append(f"| {name} | {lab} | {st['n']} | {st['n'] - st['successes']} | "
                        + " | ".join(str(f.get(x, 0)) for x in present) + " |")
     return out
+
+
+def perception_section(summary: Mapping[str, Any], task_label: Callable[[str], str],
+                       order: Callable[[str], Any]) -> list[str]:
+    """What perception got wrong, beside success (rgbd configurations only; see docs/perception.md)."""
+    if not any(st.get("perception") for st in summary["overall"].values()):
+        return []
+    out = ["", "## Perception (rgbd)", "",
+           "The planner API's objects scored against the truth after every view: *at reset* the episode's "
+           "first view, *after moves* every view after a pick-and-place. missed / false = objects not "
+           "perceived / perceived but not there, of all objects in those views; position error = median of "
+           "the views' medians / largest (mm); *erred* = episodes whose last attempt acted on a wrong view "
+           "or picked off target (see docs/failures.md, label `perception`).", "",
+           "| Task | Configuration | success | erred | pick misses | reset: missed / false of objects "
+           "| reset: pos mm med / max | after moves: missed / false of objects | after moves: pos mm med / max |",
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for name, per in _rows(summary, task_label, order):
+        for lab, st in per.items():
+            p = st.get("perception")
+            if not p:
+                continue
+            r, a = p["reset"], p["after_moves"]
+            out.append(f"| {name} | {lab} | {st['successes']}/{st['n']} | {p['erred']}/{p['episodes']} | "
+                       f"{p['pick_misses']} | {r['missed']} / {r['false']} of {r['objects']} | "
+                       f"{_mm(r['median_pos_mm'])} / {_mm(r['max_pos_mm'])} | "
+                       f"{a['missed']} / {a['false']} of {a['objects']} | "
+                       f"{_mm(a['median_pos_mm'])} / {_mm(a['max_pos_mm'])} |")
+    return out
+
+
+def _mm(v: float | None) -> str:
+    return "—" if v is None else f"{v:.1f}"
 
 
 def cost_section(summary: Mapping[str, Any], task_label: Callable[[str], str],

@@ -11,6 +11,8 @@ this module registers nothing.  So either::
 or, in Gymnasium's ``"module:env-id"`` form, ``gymnasium.make("capmj.envs.gym_ids:capmj/stack-all-blocks-on-a-zone-v0")``
 (:mod:`capmj.envs.gym_ids` is the one module whose import registers: that is what the form asks
 of a module; Gymnasium 1.x has no entry-point mechanism for environment plugins).
+``perception="rgbd"`` (``gymnasium.make(..., perception="rgbd")``) fills the ``objects``
+observation from the cameras instead of the simulator (:class:`TabletopEnv`).
 
 Spaces mirror the dm_env specs: a ``Dict`` of ``Box`` (images, depth, proprioception) and ``Text``
 (the goal); the action is ``Dict(pick=Box(4), place=Box(4))`` of ``(x, y, z, yaw)``.
@@ -69,10 +71,10 @@ class TabletopGymEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}  # one frame per pick-and-place
 
     def __init__(self, task: Task | str, config: EnvConfig | None = None, seed: int = 0,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None, perception: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        self.dm_env = TabletopEnv(task, seed=seed, config=config)
+        self.dm_env = TabletopEnv(task, seed=seed, config=config, perception=perception)
         self.render_mode = render_mode
         self.observation_space = spaces.Dict({k: to_space(s) for k, s in self.dm_env.observation_spec().items()})
         self.action_space = spaces.Dict({k: to_space(s) for k, s in self.dm_env.action_spec().items()})

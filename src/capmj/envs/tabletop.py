@@ -21,12 +21,19 @@ Why it is built this way:
   (or ``reset(seed=...)`` picks one); same seed and actions -> identical observations and rewards.
 * **Costly observations are opt-in**: the three RGB-D views are on by default; segmentation and the
   top-down heightmap are off.  ``EnvConfig(cameras=())`` gives a state-only env.
+* **Objects as the planner API knows them**: ``objects`` is one row per object, ``(obj_id, kind,
+  colour, size, x, y, z, yaw)`` (codes: indices into :data:`OBJECT_CODES`; padded rows have obj_id
+  0).  ``perception="state"`` (the default) reads them from the simulator; ``perception="rgbd"``
+  from the cameras — the bench's ``--perception rgbd`` view (:mod:`capmj.agents.perceived`): the
+  scene is perceived at reset and after every step, tracked ids survive moves, and the perception
+  error is scored against the truth for the record (:attr:`TabletopEnv.perception`, never part of
+  the observation).  The pick-and-place itself is the same primitive in both modes.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import dm_env
@@ -35,7 +42,11 @@ from dm_env import specs
 
 from capmj.agents.base import Budget, EpisodeContext
 from capmj.errors import AgentError, BudgetExceeded, ConfigError
+from capmj.perception.plugins import STATE, check_mode, load_perceiver
+from capmj.records import PerceptionNotes
 from capmj.sim.motion import PrimitiveResult
+from capmj.sim.objects import BLOCK_SIZES, KINDS
+from capmj.sim.palette import COLOR_NAMES
 from capmj.sim.robot import ARM_JOINTS
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
@@ -49,6 +60,11 @@ ACTION_LOW = np.array([WORKSPACE.xmin, WORKSPACE.ymin, WORKSPACE.zmin, -math.pi]
 ACTION_HIGH = np.array([WORKSPACE.xmax, WORKSPACE.ymax, WORKSPACE.zmax, math.pi])
 FAR_DEPTH = 5.0
 """Depth of pixels that see nothing (the scene's far plane, metres)."""
+MAX_OBJECTS = 32
+"""Rows of the ``objects`` observation (the largest scene of the built-in tasks has 17 objects)."""
+OBJECT_FIELDS = ("obj_id", "kind", "color", "size", "x", "y", "z", "yaw")
+OBJECT_CODES: dict[str, tuple[str, ...]] = {"kind": KINDS, "color": COLOR_NAMES, "size": tuple(BLOCK_SIZES)}
+"""The codes of the ``objects`` observation's categorical columns (a size is -1 for non-blocks)."""
 
 
 @dataclass(frozen=True)
@@ -66,8 +82,12 @@ class EnvConfig:
     heightmap: bool = False
     robot_meshes: bool = True
     max_steps: int | None = None
+    perception: str = "state"
+    """What the ``objects`` observation reads: ``state`` (the simulator), ``rgbd`` (the cameras) or
+    another perceiver's name (:mod:`capmj.perception.plugins`)."""
 
     def __post_init__(self) -> None:
+        check_mode(self.perception)
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"image size must be positive, got {self.width}x{self.height}")
         if self.max_steps is not None and self.max_steps < 1:
@@ -99,13 +119,19 @@ class TabletopEnv(dm_env.Environment):
     """One capmj task as a dm_env environment (see the module docstring for the contract)."""
 
     def __init__(self, task: Task | str, seed: int = 0, *, config: EnvConfig | None = None,
-                 seed_stride: int = 1) -> None:
+                 seed_stride: int = 1, perception: str | None = None) -> None:
         if isinstance(task, str):
             from capmj.tasks.registry import get_task
 
             task = get_task(task)
         self.task: Task = task
         self.config = config or EnvConfig()
+        if perception is not None:  # the keyword overrides the config's mode
+            self.config = replace(self.config, perception=perception)
+        self._seen: Any = None
+        """rgbd mode: the episode's :class:`~capmj.agents.perceived.PerceivingContext`."""
+        self._perceived: Any = None
+        """rgbd mode: the episode's :class:`~capmj.agents.perceived.PerceivedScene`."""
         self.max_steps = step_limit(task, self.config)
         self._next_seed = int(seed)
         self._stride = int(seed_stride)
@@ -137,6 +163,7 @@ class TabletopEnv(dm_env.Environment):
             cols = int(round((WORKSPACE.xmax - WORKSPACE.xmin) / HEIGHTMAP_PIXEL))
             out["heightmap"] = specs.BoundedArray((rows, cols), np.float32, 0.0, FAR_DEPTH, "heightmap")
             out["colormap"] = specs.Array((rows, cols, 3), np.uint8, "colormap")
+        out["objects"] = specs.Array((MAX_OBJECTS, len(OBJECT_FIELDS)), np.float64, "objects")
         out["goal"] = specs.StringArray((), name="goal")
         out["joint_pos"] = specs.Array((len(ARM_JOINTS),), np.float64, "joint_pos")
         out["tip_pose"] = specs.Array((4,), np.float64, "tip_pose")
@@ -169,6 +196,13 @@ class TabletopEnv(dm_env.Environment):
         self.world.settle()
         self._ctx = EpisodeContext(self.task, self.seed, self.scene, self.world,
                                    budget=Budget(max_primitives=self.max_steps))
+        if self.config.perception != STATE:
+            from capmj.agents.perceived import PerceivedScene, PerceivingContext
+            from capmj.agents.perception_audit import PerceptionAudit
+
+            audit = PerceptionAudit(self._ctx, self.config.perception)
+            self._perceived = PerceivedScene(self.world, load_perceiver(self.config.perception), observer=audit.observe)
+            self._seen = PerceivingContext(self._ctx, self._perceived, audit)
         self.steps, self._done, self.last_result = 0, False, None
         self.verdict = self.task.evaluate(self.scene, self.world.state())
         self.initial_progress = self.progress = float(self.verdict.progress)
@@ -179,7 +213,8 @@ class TabletopEnv(dm_env.Environment):
             return self.reset()
         pick, place, yaw = primitive_args(action)
         try:
-            res: PrimitiveResult | None = self._ctx.pick_and_place(pick, place, yaw)
+            acting = self._seen if self._seen is not None else self._ctx  # rgbd: perceive again after it
+            res: PrimitiveResult | None = acting.pick_and_place(pick, place, yaw)
         except BudgetExceeded:  # the simulation-step budget: the episode is cut off (truncation)
             res = None
         self.last_result = res
@@ -214,10 +249,19 @@ class TabletopEnv(dm_env.Environment):
     def success(self) -> bool:
         return bool(self.verdict is not None and self.verdict.success)
 
+    @property
+    def perception(self) -> PerceptionNotes | None:
+        """rgbd mode: the episode's perception error so far, scored against the truth (None in state mode)."""
+        notes = self._ctx.notes.get("perception") if self._ctx is not None else None
+        return notes if isinstance(notes, PerceptionNotes) else None
+
     def close(self) -> None:
         if self._rig is not None:
             self._rig.close()
             self._rig = None
+        if self._perceived is not None:
+            self._perceived.close()
+            self._seen = self._perceived = None
 
     # ------------------------------------------------------------------ observing
     def _observe(self) -> dict[str, np.ndarray]:
@@ -239,12 +283,28 @@ class TabletopEnv(dm_env.Environment):
             hm = self._rig.heightmap()
             obs["heightmap"] = np.minimum(np.array(hm.height), np.float32(FAR_DEPTH))
             obs["colormap"] = np.array(hm.colormap)
+        obs["objects"] = self._objects()
         obs["goal"] = np.array(self.scene.goal, dtype=object)
         obs["joint_pos"] = w.arm_q()
         pos, rot = w.tip_pose()
         obs["tip_pose"] = np.array([pos[0], pos[1], pos[2], mat_yaw(rot)])
         obs["suction"] = np.array([0.0 if w.suction.held is None else 1.0])
         return obs
+
+    def _objects(self) -> np.ndarray:
+        """The ``objects`` observation: from the simulator, or the latest perception (rgbd)."""
+        w = self.world
+        assert w is not None
+        out = np.zeros((MAX_OBJECTS, len(OBJECT_FIELDS)))
+        if self._perceived is not None:
+            seen = self._perceived
+            rows = [(o, seen.pose(o.obj_id)) for o in seen.objects]
+        else:
+            rows = [(o, w.pose(o.obj_id)) for o in w.objects]
+        for i, (o, pose) in enumerate(rows[:MAX_OBJECTS]):
+            size = OBJECT_CODES["size"].index(o.size) if o.size in OBJECT_CODES["size"] else -1
+            out[i] = (o.obj_id, KINDS.index(o.kind), COLOR_NAMES.index(o.color), size, *pose.pos, pose.yaw)
+        return out
 
     # ------------------------------------------------------------------ helpers for policies
     def oracle_action(self, pick: Any, place: Any, place_yaw: float | None = None) -> dict[str, np.ndarray]:

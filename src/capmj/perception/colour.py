@@ -43,6 +43,16 @@ _LINEAR_U8 = _linear(np.arange(256) / 255.0)
 def srgb_to_lab(rgb: np.ndarray) -> np.ndarray:
     """CIELAB (D65) of sRGB values in [0, 255], any leading shape (..., 3) -> (..., 3) float64."""
     a = np.asarray(rgb)
+    if a.dtype == np.uint8 and a.ndim == 2 and len(a) > 4096:
+        # Rendered images hold far fewer distinct colours than pixels: convert each once.
+        packed = (a[:, 0].astype(np.int32) << 16) | (a[:, 1].astype(np.int32) << 8) | a[:, 2]
+        distinct, where = np.unique(packed, return_inverse=True)
+        rgb3 = np.stack([distinct >> 16, (distinct >> 8) & 255, distinct & 255], axis=1).astype(np.uint8)
+        return _lab(rgb3)[where.ravel()]
+    return _lab(a)
+
+
+def _lab(a: np.ndarray) -> np.ndarray:
     lin = _LINEAR_U8[a] if a.dtype == np.uint8 else _linear(a.astype(np.float64) / 255.0)
     xyz = lin @ _RGB_TO_XYZ.T / _D65
     f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
@@ -55,10 +65,23 @@ def camera_gain(table_pixels: np.ndarray) -> np.ndarray:
     The median resists the few pixels of object edges that slip into the table selection; with
     no table pixel (an occluded view) the gain is the lighting's nominal 1.15.
     """
-    px = np.asarray(table_pixels, dtype=np.float64).reshape(-1, 3)
+    px = np.asarray(table_pixels).reshape(-1, 3)
     if len(px) < 50:
         return np.full(3, 1.15)
-    return np.median(px, axis=0) / (np.array(TABLE_RGB) * 255.0)
+    median = _median_u8(px) if px.dtype == np.uint8 else np.median(px.astype(np.float64), axis=0)
+    return median / (np.array(TABLE_RGB) * 255.0)
+
+
+def _median_u8(px: np.ndarray) -> np.ndarray:
+    """``np.median(px, axis=0)`` of 8-bit pixels (N, 3) from their histograms: the same value
+    (the middle one, or the mean of the two middle ones), without sorting 100 000 pixels."""
+    n = len(px)
+    out = np.empty(3)
+    for ch in range(3):
+        cum = np.cumsum(np.bincount(px[:, ch], minlength=256))
+        lo, hi = np.searchsorted(cum, [(n - 1) // 2, n // 2], side="right")  # values of ranks (n-1)//2, n//2
+        out[ch] = (float(lo) + float(hi)) / 2
+    return out
 
 
 @dataclass(frozen=True, eq=False)

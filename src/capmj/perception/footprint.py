@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from capmj.sim.objects import FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
+from capmj.sim.objects import BLOCK_SIZES, FIXTURE_CLEARANCE, FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,17 @@ def square_yaw(rect: Rect) -> float:
 
 
 FIXTURE_RECT = (FIXTURE_LONG, FIXTURE_SHORT + FIXTURE_WALL)
-"""Sides (m) of the rectangle enclosing the L: 10 x 6 cm; the origin is 3 cm in from the corner."""
+"""Sides (m) of the rectangle enclosing the L: 10 x 6 cm."""
+FIXTURE_ORIGIN_IN = FIXTURE_WALL + FIXTURE_CLEARANCE + BLOCK_SIZES["small"] / 2
+"""How far (m) the origin (slot (0, 0)) lies in from the L's outer corner along each wall: a wall,
+the clearance and half a small block (3.3 cm; ``mjcf/fixture.xml``)."""
+FIXTURE_WALLS: tuple[tuple[tuple[float, float], float, float], ...] = (
+    ((FIXTURE_LONG / 2 - FIXTURE_ORIGIN_IN, FIXTURE_WALL / 2 - FIXTURE_ORIGIN_IN), FIXTURE_LONG / 2, FIXTURE_WALL / 2),
+    ((FIXTURE_WALL / 2 - FIXTURE_ORIGIN_IN, FIXTURE_WALL + FIXTURE_SHORT / 2 - FIXTURE_ORIGIN_IN),
+     FIXTURE_WALL / 2, FIXTURE_SHORT / 2),
+)
+"""((centre x, centre y), half x, half y) of the long and the short wall in the fixture's frame
+(``mjcf/fixture.xml`` geoms g0, g1; ``tests/test_mjcf.py`` checks that file against the constants)."""
 
 
 @dataclass(frozen=True)
@@ -109,8 +119,8 @@ def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
     """The L-fixture in its enclosing rectangle: which corner the walls meet at fixes the yaw.
 
     In the fixture's frame the long wall runs along +x from the corner and the short wall along
-    +y (``mjcf/fixture.xml``), and the origin is (wall + slot/2) from both walls, i.e. 3 cm in from
-    the corner along each.  Each of the four corner hypotheses (the long side's two directions x
+    +y (``mjcf/fixture.xml``), and the origin is :data:`FIXTURE_ORIGIN_IN` in from the corner
+    along each (wall + clearance + half a slot).  Each of the four corner hypotheses (the long side's two directions x
     the short side's two) is scored by the cells lying on its two walls; the best wins.
     """
     p = np.asarray(xy, dtype=np.float64) - (rect.cx, rect.cy)
@@ -129,7 +139,7 @@ def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
             if x_axis[0] * y_axis[1] - x_axis[1] * y_axis[0] < 0:  # a mirrored L cannot be the fixture
                 mismatch += 1.0
             origin = (np.array([rect.cx, rect.cy]) - half_l * x_axis - half_w * y_axis
-                      + FIXTURE_RECT[1] / 2 * (x_axis + y_axis))
+                      + FIXTURE_ORIGIN_IN * (x_axis + y_axis))
             yaw = math.atan2(float(x_axis[1]), float(x_axis[0]))
             if best is None or mismatch < best.mismatch - 1e-9:
                 best = LFit(float(origin[0]), float(origin[1]), yaw, mismatch)
@@ -137,4 +147,4 @@ def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
     return best
 
 
-__all__ = ["FIXTURE_RECT", "LFit", "Rect", "cell_corners", "fit_l", "min_area_rect", "square_yaw"]
+__all__ = ["FIXTURE_ORIGIN_IN", "FIXTURE_RECT", "FIXTURE_WALLS", "LFit", "Rect", "cell_corners", "fit_l", "min_area_rect", "square_yaw"]

@@ -3,7 +3,8 @@
 
 :mod:`~capmj.records.episode` (the runner's :class:`EpisodeResult`, the run folder's
 :class:`EpisodeRecord`), :mod:`~capmj.records.notes` (the LLM agent's :class:`LLMNotes`,
-:class:`Spend`), :mod:`~capmj.records.attempt` (:class:`AttemptRecord`); :mod:`~capmj.records.codec`
+:class:`Spend`), :mod:`~capmj.records.perception` (:class:`PerceptionNotes` of an rgbd
+episode), :mod:`~capmj.records.attempt` (:class:`AttemptRecord`); :mod:`~capmj.records.codec`
 turns them into JSON data and back.  They sit below every layer (like :mod:`capmj.errors`): agents
 and the runner write them, the benchmark and replay read them.
 """
@@ -11,6 +12,7 @@ and the runner write them, the benchmark and replay read them.
 from capmj.records.attempt import ATTEMPT_FIELDS, ApiError, AttemptRecord
 from capmj.records.episode import SCHEMA, Drift, Episode, EpisodeRecord, EpisodeResult, Key
 from capmj.records.notes import LLMNotes, Spend, SpendLimits
+from capmj.records.perception import PerceptionCall, PerceptionNotes
 
 __all__ = ["ATTEMPT_FIELDS", "SCHEMA", "ApiError", "AttemptRecord", "Drift", "Episode", "EpisodeRecord",
-           "EpisodeResult", "Key", "LLMNotes", "Spend", "SpendLimits"]
+           "EpisodeResult", "Key", "LLMNotes", "PerceptionCall", "PerceptionNotes", "Spend", "SpendLimits"]

@@ -19,13 +19,14 @@ from typing import Any, ClassVar
 from capmj.errors import RecordError
 from capmj.records.codec import from_plain, to_plain
 from capmj.records.notes import LLMNotes
+from capmj.records.perception import PerceptionNotes
 
 __all__ = ["SCHEMA", "Drift", "Episode", "EpisodeRecord", "EpisodeResult", "Key"]
 
-SCHEMA = "capmj.episode/2"
+SCHEMA = "capmj.episode/3"
 """The ``schema`` of every ``episodes.jsonl`` line this version writes.  Lines without one were
-written before records were typed; ``capmj.episode/1`` lines lack ``error_type``/``error_status``
-(see :mod:`capmj.bench.migrate`)."""
+written before records were typed; ``capmj.episode/1`` lines lack ``error_type``/``error_status``,
+``capmj.episode/2`` lines ``perception`` (see :mod:`capmj.bench.migrate`)."""
 
 Key = tuple[str, int, str, "str | None"]
 """The identity of an episode in a grid: (task, seed, agent, model)."""
@@ -56,6 +57,8 @@ class Episode:
     ``calls`` are the episode's LLM calls (messages and answer, :mod:`capmj.agents.llm_meter`).
     ``error_type`` is the class of what failed (:func:`capmj.errors.error_facts`), None without
     an error; ``error_status`` the failed primitive's status for a ``MotionFailed``.
+    ``perception`` is the perception error of an episode whose planner API read the cameras
+    (:class:`~capmj.records.perception.PerceptionNotes`); None (and not written) in state mode.
     """
 
     task: str
@@ -79,8 +82,10 @@ class Episode:
     error_type: str | None = None
     error_status: str | None = None
     calls: tuple[dict[str, Any], ...] = ()
+    perception: PerceptionNotes | None = None
 
     EMPTY_IF_NONE: ClassVar[frozenset[str]] = frozenset({"llm", "drift"})
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"perception"})
 
     @property
     def key(self) -> Key:
@@ -116,7 +121,7 @@ class EpisodeRecord(Episode):
     failure: str | None = None
     transcript: str | None = None
 
-    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"transcript"})
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"transcript", "perception"})
 
     @classmethod
     def of(cls, result: Episode, *, failure: str | None, transcript: str | None = None) -> "EpisodeRecord":
