@@ -16,7 +16,9 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from capmj.sim import footprint as _footprint
 from capmj.sim.bounds import WORKSPACE
+from capmj.sim.footprint import TILT_TOL
 from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, ZONE_SIZE, ObjectSpec
 from capmj.sim.pose import Vector, from_frame_2d, to_frame_2d
 from capmj.sim.state import SceneState
@@ -27,8 +29,6 @@ BOWL_TOL = 0.05
 """A centre within this xy distance (m) of a bowl centre is "in" the bowl (when below the rim)."""
 Z_TOL = 0.015
 """Vertical tolerance (m): resting heights and stack gaps."""
-TILT_TOL = math.radians(15.0)
-"""Maximum tilt (rad) of an upright object; more is toppled."""
 YAW_TOL = math.radians(15.0)
 """Rotation tolerance (rad) of an SE(2) pose match."""
 STACK_AXIS_TOL = 0.02
@@ -619,19 +619,11 @@ CENTRE_TOL = 0.02
 
 
 def footprint(state: SceneState, obj_id: int):
-    """The object's footprint on the table as a shapely polygon: its oriented xy rectangle at the
-    current yaw (a tilted object: its world xy box from the half extents), a disc for balls."""
-    from shapely.geometry import Point, Polygon, box
-
-    spec, pose = state.spec(obj_id), state.poses[obj_id]
-    c = state.pos(obj_id)
-    hx, hy, hz = spec.half_extents
-    if spec.kind in ("ball", "bowl"):
-        return Point(c[0], c[1]).buffer(hx, 32)
-    if pose.tilt > TILT_TOL:
-        ext = np.abs(pose.rotation) @ np.array([hx, hy, hz])
-        return box(c[0] - ext[0], c[1] - ext[1], c[0] + ext[0], c[1] + ext[1])
-    return Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], pose.yaw, c[:2]))
+    """The object's footprint on the table as a shapely geometry: capmj's one footprint model
+    (:func:`capmj.sim.footprint.shape`, the planner API's too) at its pose in ``state`` — its
+    oriented rectangle at the current yaw (a fixture: its two walls; tilted more than 15°: its
+    world xy box), a disc for balls and bowls."""
+    return _footprint.shape(state.spec(obj_id), state.poses[obj_id])
 
 
 def touching_pairs(state: SceneState, ids: Sequence[int], gap: float = TOUCH_GAP) -> list[tuple[int, int, float]]:
