@@ -83,8 +83,10 @@ class LocalBox:
     half: tuple[float, float, float]
 
 
-_SLOT = BLOCK_SIZES["small"]
-_INNER = _SLOT / 2 + FIXTURE_CLEARANCE  # slot (0, 0) centre to a wall's inner face
+FIXTURE_SLOT = BLOCK_SIZES["small"]
+"""Slot pitch ``a`` (m) of an L-fixture: its slots hold small blocks, and its body origin is the
+centre of slot (0, 0)."""
+_INNER = FIXTURE_SLOT / 2 + FIXTURE_CLEARANCE  # slot (0, 0) centre to a wall's inner face
 FIXTURE_WALLS: tuple[LocalBox, ...] = (
     LocalBox((FIXTURE_LONG / 2 - _INNER - FIXTURE_WALL, -(_INNER + FIXTURE_WALL / 2), 0.0),
              (FIXTURE_LONG / 2, FIXTURE_WALL / 2, FIXTURE_HEIGHT / 2)),
@@ -152,5 +154,5 @@ def shape(spec: ObjectSpec, pose: Pose):
     return shapes[0] if len(shapes) == 1 else unary_union(shapes)
 
 
-__all__ = ["DISC_RADIUS", "Disc", "FIXTURE_WALLS", "LocalBox", "Part", "ROUND_KINDS", "Rect", "TILT_TOL", "local_boxes",
+__all__ = ["DISC_RADIUS", "Disc", "FIXTURE_SLOT", "FIXTURE_WALLS", "LocalBox", "Part", "ROUND_KINDS", "Rect", "TILT_TOL", "local_boxes",
            "part_shape", "parts", "shape", "world_box"]
