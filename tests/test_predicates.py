@@ -463,3 +463,25 @@ def test_concentric_circles():
     close_pts, _ = _ring(8, 0.09, phase=0.2)  # radii only 3 cm apart
     objs3, poses3 = _blocks_at(inner + close_pts, ["red"] * 4 + ["blue"] * 8, a1 + a2)
     assert "differ by less" in P.concentric(state_of(objs3, poses3), ids1, ids2)[1]
+
+
+# ================================================================== the package's surface
+def test_every_concept_module_is_exported_whole_and_documented():
+    """``capmj.tasks.predicates`` re-exports exactly what its concept modules define as public, so a
+    predicate added to a module but not to the package (or the reverse) fails here."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    names: list[str] = []
+    for info in pkgutil.iter_modules(P.__path__):
+        module = importlib.import_module(f"{P.__name__}.{info.name}")
+        names += module.__all__
+        for n in module.__all__:
+            assert getattr(P, n) is getattr(module, n), n
+    assert len(P.__all__) == len(set(P.__all__))
+    assert sorted(names) == sorted(P.__all__)
+    for n in P.__all__:
+        obj = getattr(P, n)
+        if inspect.isfunction(obj) or inspect.isclass(obj):
+            assert inspect.getdoc(obj), f"{n} has no docstring (the generator's prompt shows it)"

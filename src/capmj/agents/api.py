@@ -19,10 +19,11 @@ Conventions (the spec's, stated at every function):
   movable/fixed/size words, underscores, an id whose object has the given words, a unique
   colour + kind); each such resolution is logged.  Otherwise ``ValueError`` lists the closest
   and the valid names.
-* Footprints: blocks, zones and fixture walls are oriented rectangles (their geoms' xy extent at
-  the current yaw), bowls and balls discs; a tilted object (> 20°) uses its world xy box.  The
-  geometry (footprints, surfaces, occupancy, free positions) lives in
-  :mod:`capmj.agents.footprints`; this module resolves names, validates arguments and logs.
+* Footprints: capmj's one footprint model (:mod:`capmj.sim.footprint`, the judge's too): blocks,
+  zones and fixture walls are oriented rectangles at the current yaw, bowls and balls discs; an
+  object tilted more than 15° uses its world xy box.  The geometry (footprints, surfaces,
+  occupancy, free positions) lives in :mod:`capmj.agents.footprints`; this module resolves names,
+  validates arguments and logs.
 
 Every call is appended to :attr:`PlannerAPI.call_log` (function, arguments, result summary or
 error, simulated time) for the episode log.
@@ -42,9 +43,10 @@ from capmj.agents.api_values import is_vector as _is_vector
 from capmj.agents.api_values import summary as _summary
 from capmj.agents.base import EpisodeContext
 from capmj.agents.capravens_api import CapRavensFunctions
-from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, ROUND_KINDS, TILTED, Footprints
+from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, Footprints
 from capmj.errors import MotionFailed, PortingDifference, UnknownObjectError, describe
 from capmj.sim.bounds import WORKSPACE
+from capmj.sim.footprint import ROUND_KINDS
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import quat_euler_xyz, quat_yaw, wxyz
 from capmj.tasks.protocol import episode_rng
@@ -525,5 +527,5 @@ API_FUNCTIONS: tuple[str, ...] = (
 
 
 # the geometry constants are re-exported: callers and benchmarks import them from here
-__all__ = ["API_FUNCTIONS", "FREE_CLEARANCE", "FREE_GRID_STEP", "PlanFunctions", "PlannerAPI", "REACH_RADIUS", "TILTED",
+__all__ = ["API_FUNCTIONS", "FREE_CLEARANCE", "FREE_GRID_STEP", "PlanFunctions", "PlannerAPI", "REACH_RADIUS",
            "denormalize_uv"]

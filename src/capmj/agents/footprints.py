@@ -1,28 +1,31 @@
 """Table geometry of the planner API: object footprints and the free-space queries built on them.
 
-A footprint is what an object covers of the table seen from above: blocks, zones and fixture walls
-are oriented rectangles (their geoms' xy extent at the current yaw), bowls and balls discs; a
-tilted object (> 20°) uses its world xy box.  On footprints rest the questions plan code asks about
-the table: how far a point is from an object, how high something put down at a point rests, what
-lies on what, what occupies a point or an object, and where a free position is.
+A footprint is what an object covers of the table seen from above, and it is capmj's one model of
+it, :mod:`capmj.sim.footprint` (the success predicates use the same): blocks, zones and fixture
+walls are oriented rectangles at the current yaw, bowls and balls discs, and an object tilted more
+than :data:`~capmj.sim.footprint.TILT_TOL` (15°) covers its world xy box.  On footprints rest the
+questions plan code asks about the table: how far a point is from an object, how high something
+put down at a point rests, what lies on what, what occupies a point or an object, and where a free
+position is.
 
-:class:`Footprints` reads poses live through the callables it is given (normally
-:meth:`Footprints.from_world`), so every query answers for the scene as it is now.  It knows
-nothing of names, episodes or call logging: that is the facade in :mod:`capmj.agents.api`.
+:class:`Footprints` reads specs and poses live through the callables it is given (normally
+:meth:`Footprints.from_world`; the perceived API passes its detections), so every query answers
+for the scene as it is now.  It knows nothing of names, episodes or call logging: that is the
+facade in :mod:`capmj.agents.api`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Iterable, Sequence
 
-import mujoco
 import numpy as np
 
+from capmj.sim import footprint
 from capmj.sim.bounds import WORKSPACE, Bounds
-from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, BOWL_RADIUS, BALL_RADIUS, ObjectSpec
-from capmj.sim.pose import Vector, from_frame_2d, mat_yaw
+from capmj.sim.footprint import Disc
+from capmj.sim.objects import BOWL_FLOOR, BOWL_HEIGHT, BOWL_INNER_RADIUS, ObjectSpec
+from capmj.sim.pose import Vector
 from capmj.sim.state import Pose
 
 if TYPE_CHECKING:
@@ -36,34 +39,6 @@ FREE_GRID_STEP = 0.005
 FREE_CLEARANCE = 0.045
 """Default clearance (m) from a free position to every footprint: a big block (0.06 m, half
 diagonal 0.042 m) fits there at any yaw."""
-ROUND_KINDS = frozenset({"bowl", "ball"})
-"""Kinds whose footprint is a disc whatever their yaw (their geoms' boxes turn with it)."""
-TILTED = math.radians(20.0)
-"""Tilt beyond which an object's footprint is its world xy box (its geoms no longer lie flat)."""
-
-
-@dataclass(frozen=True, slots=True)
-class Disc:
-    """A round footprint part: centre (m) and radius (m)."""
-
-    cx: float
-    cy: float
-    r: float
-
-
-@dataclass(frozen=True, slots=True)
-class Rect:
-    """A rectangular footprint part: centre (m), yaw (rad) and half sizes along its own axes (m)."""
-
-    cx: float
-    cy: float
-    yaw: float
-    hx: float
-    hy: float
-
-
-Part = Disc | Rect
-"""One footprint part."""
 
 
 def distances(px: np.ndarray, py: np.ndarray, parts: np.ndarray) -> np.ndarray:
@@ -85,9 +60,8 @@ def distances(px: np.ndarray, py: np.ndarray, parts: np.ndarray) -> np.ndarray:
 class Footprints:
     """Footprints of a scene's objects and the table queries on them, read live.
 
-    ``objects`` gives the current object specs, ``pose``, ``aabb`` and ``top_z`` an object's pose,
-    world axis-aligned box and top height, and ``geom_parts`` the footprint parts of an upright
-    object's geoms at its current pose (see :meth:`from_world`, which builds all five from a
+    ``objects`` gives the current object specs, ``pose`` and ``top_z`` an object's pose and top
+    height (see :meth:`from_world`, which builds all three from a
     :class:`~capmj.sim.world.World`).
     """
 
@@ -95,51 +69,24 @@ class Footprints:
         self,
         objects: Callable[[], Sequence[ObjectSpec]],
         pose: Callable[[int], Pose],
-        aabb: Callable[[int], tuple[np.ndarray, np.ndarray]],
         top_z: Callable[[int], float],
-        geom_parts: Callable[[int], list[Part]],
     ) -> None:
         self._objects = objects
         self._pose = pose
-        self._aabb = aabb
         self._top_z = top_z
-        self._geom_parts = geom_parts
 
     @classmethod
     def from_world(cls, world: World) -> Footprints:
         """Footprints of a live world: objects and poses are read from it on every query."""
-        # the geoms of every object (static; their poses are read live)
-        geoms = {o.obj_id: [int(g) for g in np.flatnonzero(world.geom_obj == o.obj_id)] for o in world.objects}
-
-        def geom_parts(oid: int) -> list[Part]:
-            m, d = world.model, world.data
-            out: list[Part] = []
-            for g in geoms[oid]:
-                mat = d.geom_xmat[g].reshape(3, 3)
-                centre = d.geom_xpos[g] + mat @ m.geom_aabb[g, :3]
-                half = m.geom_aabb[g, 3:]
-                if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE):
-                    out.append(Disc(centre[0], centre[1], float(half[0])))
-                    continue
-                out.append(Rect(centre[0], centre[1], mat_yaw(mat), float(half[0]), float(half[1])))
-            return out
-
-        return cls(lambda: tuple(world.objects), world.pose, world.aabb, world.top_z, geom_parts)
+        return cls(lambda: tuple(world.objects), world.pose, world.top_z)
 
     def _pos(self, oid: int) -> np.ndarray:
         return np.asarray(self._pose(oid).pos, float)
 
     # ================================================================== footprints
-    def parts(self, o: ObjectSpec) -> list[Part]:
-        """Footprint parts of an object now: discs (bowls, balls, round geoms) and rectangles."""
-        pose = self._pose(o.obj_id)
-        if o.kind in ROUND_KINDS:
-            r = BOWL_RADIUS if o.kind == "bowl" else BALL_RADIUS
-            return [Disc(pose.pos[0], pose.pos[1], r)]
-        if pose.tilt > TILTED:
-            lo, hi = self._aabb(o.obj_id)
-            return [Rect((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0, (hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2)]
-        return self._geom_parts(o.obj_id)
+    def parts(self, o: ObjectSpec) -> list[footprint.Part]:
+        """Footprint parts of an object now (:func:`capmj.sim.footprint.parts` at its pose)."""
+        return footprint.parts(o, self._pose(o.obj_id))
 
     def part_arrays(self, objs: Sequence[ObjectSpec]) -> tuple[np.ndarray, np.ndarray]:
         """Footprint parts of ``objs`` as one (k, 7) array [cx, cy, cos, sin, hx, hy, disc] and
@@ -160,18 +107,8 @@ class Footprints:
         return float(distances(np.array([float(xy[0])]), np.array([float(xy[1])]), parts).min())
 
     def polygon(self, o: ObjectSpec):
-        """An object's footprint as a shapely geometry (discs as 32-segment polygons)."""
-        from shapely.geometry import Point, Polygon
-        from shapely.ops import unary_union
-
-        shapes = []
-        for p in self.parts(o):
-            if isinstance(p, Disc):
-                shapes.append(Point(p.cx, p.cy).buffer(p.r, 32))
-                continue
-            hx, hy = p.hx, p.hy
-            shapes.append(Polygon(from_frame_2d([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)], p.yaw, (p.cx, p.cy))))
-        return unary_union(shapes)
+        """An object's footprint now as a shapely geometry (:func:`capmj.sim.footprint.shape`)."""
+        return footprint.shape(o, self._pose(o.obj_id))
 
     # ================================================================== what rests where
     def support_z(self, xy: Vector, exclude: set[int]) -> float:
@@ -179,7 +116,7 @@ class Footprints:
         covers the point, or the floor of a bowl (or what lies in it) when inside its wall.
 
         Answers on exact footprints at the point itself, and zones (flat marks) do not count.  The
-        arm's own descent uses the coarser :meth:`capmj.sim.primitives.Primitives.highest_top_under`
+        arm's own descent uses the coarser :meth:`capmj.sim.primitives.Primitives.coarse_top_under`
         (where it may first touch something, e.g. a bowl's rim, not its floor)."""
         z = 0.0
         for o in self._objects():
@@ -274,5 +211,4 @@ class Footprints:
         return [round(float(xs[k // ny]), 6), round(float(ys[k % ny]), 6), 0.0]
 
 
-__all__ = ["Disc", "FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "Part", "Rect", "REACH_RADIUS", "ROUND_KINDS", "TILTED",
-           "distances"]
+__all__ = ["FREE_CLEARANCE", "FREE_GRID_STEP", "Footprints", "REACH_RADIUS", "distances"]

@@ -33,11 +33,10 @@ import numpy as np
 
 from capmj.agents.api import PlannerAPI
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import Disc, Footprints, Part, Rect
+from capmj.agents.footprints import Footprints
 from capmj.agents.perception_audit import PerceptionAudit
 from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
-from capmj.perception.footprint import FIXTURE_WALLS
 from capmj.perception.plugins import BUILTIN, STATE, load_perceiver
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
@@ -115,20 +114,10 @@ class PerceivedScene:
     def top_z(self, obj_id: int) -> float:
         return float(self.tracker.by_id(obj_id).detection.aabb[1][2])
 
-    def geom_parts(self, obj_id: int) -> list[Part]:
-        """The footprint parts of a detection: its square, its disc, or a fixture's two walls."""
-        d = self.tracker.by_id(obj_id).detection
-        x, y, _ = d.position
-        if d.kind in ("bowl", "ball"):
-            return [Disc(x, y, (d.aabb[1][0] - d.aabb[0][0]) / 2)]
-        if d.kind == "fixture":
-            c, s = math.cos(d.yaw), math.sin(d.yaw)
-            return [Rect(x + c * u - s * v, y + s * u + c * v, d.yaw, hx, hy) for (u, v), hx, hy in FIXTURE_WALLS]
-        half = (d.aabb[1][2] - d.aabb[0][2]) / 2 if d.kind == "block" else 0.06 * d.scale
-        return [Rect(x, y, d.yaw, half, half)]
-
     def footprints(self) -> Footprints:
-        return Footprints(lambda: self.objects, self.pose, self.aabb, self.top_z, self.geom_parts)
+        """The planner's footprints of the perceived specs and poses: the same model as in state
+        mode (:mod:`capmj.sim.footprint`), so a fixture's walls are where the file builds them."""
+        return Footprints(lambda: self.objects, self.pose, self.top_z)
 
 
 class PerceivingContext:

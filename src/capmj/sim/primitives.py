@@ -46,30 +46,33 @@ class Primitives:
         self.cfg = self.motion.cfg
 
     # ------------------------------------------------------------------ geometry
-    def highest_top_under(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
-        """Highest world-box top (m) of any object under a disc of ``radius`` at ``xy`` (0 for the
+    def coarse_top_under(self, xy: np.ndarray, exclude: int | None = None, radius: float = CUP_RADIUS) -> float:
+        """Highest coarse-box top (m) of any object under a disc of ``radius`` at ``xy`` (0 for the
         bare table): where a guarded descent there can first meet something.
 
-        A deliberately coarse, conservative bound for motion: axis-aligned boxes grown by the
-        cup's radius, zones counted, a bowl's rim rather than its floor.  The descent starts
+        A deliberately coarse, conservative bound for motion, not a footprint: the objects' world
+        axis-aligned boxes (:meth:`~capmj.sim.world.World.object_boxes`) grown by the cup's
+        radius, zones counted, a bowl's rim rather than its floor.  The descent starts
         ``approach_gap`` above it and stops at contact anyway.  It is not the height an object
         comes to rest on (a bowl's floor, never a zone): that is the planner API's
-        :meth:`capmj.agents.footprints.Footprints.support_z`, on exact footprints.
+        :meth:`capmj.agents.footprints.Footprints.support_z`, on capmj's one footprint model
+        (:mod:`capmj.sim.footprint`).
         """
         ids, lo, hi = self.world.object_boxes()
         under = (ids != exclude) & (lo[:, 0] - radius <= xy[0]) & (xy[0] <= hi[:, 0] + radius) \
             & (lo[:, 1] - radius <= xy[1]) & (xy[1] <= hi[:, 1] + radius)
         return float(hi[under, 2].max(initial=0.0))
 
-    def highest_top(self, exclude: int | None = None) -> float:
-        """Highest object top (m) on the whole table (0 for the bare table): transit clears it."""
+    def coarse_top(self, exclude: int | None = None) -> float:
+        """Highest coarse-box top (m) of any object on the whole table (0 for the bare table):
+        transit clears it."""
         ids, _, hi = self.world.object_boxes()
         return float(hi[ids != exclude, 2].max(initial=0.0))
 
     def transit_height(self, exclude: int | None = None, hang: float = 0.0) -> float:
         """Tip height (m) for moving sideways: ``clearance`` above every object's top (but
         ``exclude``, the carried one) plus ``hang``, how far a carried object reaches below the tip."""
-        return max(self.cfg.min_transit_z, self.highest_top(exclude=exclude) + self.cfg.clearance + hang)
+        return max(self.cfg.min_transit_z, self.coarse_top(exclude=exclude) + self.cfg.clearance + hang)
 
     def _unwound_yaw(self, pos: np.ndarray) -> float:
         """A tool yaw for reaching ``pos`` that keeps the last wrist joint near zero.
@@ -144,7 +147,7 @@ class Primitives:
         m.unwind_wrist()
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         over_pick = np.array([pick[0], pick[1], transit])
-        surface = self.highest_top_under(pick[:2])
+        surface = self.coarse_top_under(pick[:2])
         touching = lambda: w.suction.touching() is not None  # noqa: E731
         status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
                                         stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
@@ -170,7 +173,7 @@ class Primitives:
         if len(place) > 2:
             centre_z = float(place[2])
         else:
-            centre_z = self.highest_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
+            centre_z = self.coarse_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         down = np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot])
         # 3. lift, carry and go down until the carried object touches (one move, corners rounded)
