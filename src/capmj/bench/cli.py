@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, NoReturn, Sequence
 
+from capmj.bench.seeds import TEST_SEEDS, parse_seeds
 from capmj.errors import CapmjError, ConfigError
 from capmj.llm.options import add_llm_options, llm_values
 
@@ -28,8 +29,6 @@ if TYPE_CHECKING:  # the bench modules load lazily: importing the CLI stays ligh
     from capmj.bench.spend import BudgetTracker, RunBudget
     from capmj.records import EpisodeRecord
 
-TEST_SEEDS = "10001:10101:2"
-"""The test split: the 50 odd seeds from 10001 (CLIPort convention)."""
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
                "replan_retries", "timeout_s", "max_tokens", "cache_dir", "cache_only", "episode_max_tokens",
@@ -149,45 +148,7 @@ def build_report_parser() -> argparse.ArgumentParser:
     return p
 
 
-# ---------------------------------------------------------------------- parsing helpers
-def parse_seeds(text: str) -> list[int]:
-    """``"1,3,5"``, ``"10001:10101:2"`` or a mix ``"1,10:20"``; order kept, repeats dropped."""
-    out: list[int] = []
-    parts = [p.strip() for p in str(text).split(",")]
-    if not any(parts):
-        raise ConfigError(f"empty seed list {text!r}; give e.g. 1,3,5 or {TEST_SEEDS}")
-    for part in parts:
-        if not part:
-            raise ConfigError(f"bad seed list {text!r}: empty item; give e.g. 1,3,5 or {TEST_SEEDS}")
-        if ":" in part:
-            bits = part.split(":")
-            if len(bits) not in (2, 3):
-                raise ConfigError(f"bad seed range {part!r}: use start:stop[:step], e.g. {TEST_SEEDS}")
-            try:
-                start, stop = int(bits[0]), int(bits[1])
-                step = int(bits[2]) if len(bits) == 3 else 1
-            except ValueError:
-                raise ConfigError(f"bad seed range {part!r}: start, stop and step must be integers, e.g. {TEST_SEEDS}") from None
-            if step <= 0:
-                raise ConfigError(f"bad seed range {part!r}: step must be positive")
-            if start >= stop:
-                raise ConfigError(f"bad seed range {part!r}: it is empty (stop is excluded and must exceed start)")
-            if start < 0:
-                raise ConfigError(f"bad seed range {part!r}: seeds must be >= 0")
-            vals: Sequence[int] = range(start, stop, step)
-        else:
-            try:
-                vals = [int(part)]
-            except ValueError:
-                raise ConfigError(f"bad seed {part!r}: seeds are integers; give e.g. 1,3,5 or {TEST_SEEDS}") from None
-            if vals[0] < 0:
-                raise ConfigError(f"bad seed {part!r}: seeds must be >= 0")
-        for v in vals:
-            if v not in out:
-                out.append(v)
-    return out
-
-
+# ---------------------------------------------------------------------- helpers
 def _one_line(msg: str) -> str:
     return " ".join(str(msg).split())
 
@@ -396,11 +357,13 @@ def _write_config(args: argparse.Namespace, argv: Sequence[str], s: _Settings, g
 def _plan(s: _Settings, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
     """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
     and the grid's size; prints the plan to stderr."""
-    from capmj.bench.grid import Job, rrd_relpath
-    from capmj.bench.results import EPISODES, read_records
+    from capmj.bench.results import read_records
+    from capmj.bench.rundir import RunDir
     from capmj.bench.spend import BudgetTracker
+    from capmj.bench.worker import Job
 
-    existing, bad = read_records(s.out / EPISODES)
+    run_dir = RunDir(s.out)
+    existing, bad = read_records(run_dir.episodes)
     done = {r.key for r in existing}
     budget = BudgetTracker(s.run_budget, existing)
     jobs = []
@@ -408,7 +371,7 @@ def _plan(s: _Settings, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
         for seed in g.seeds:
             if (t, seed, g.agent_label, g.model) in done:
                 continue
-            rrd = str((s.out / rrd_relpath(t, seed, g.agent_label, g.model)).resolve()) if s.log else None
+            rrd = str(run_dir.rrd(t, seed, g.agent_label, g.model)) if s.log else None
             jobs.append(Job(t, seed, rrd))
     total = len(g.tasks) * len(g.seeds)
     print(f"capmj-bench: {len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "
@@ -452,22 +415,26 @@ def _execute(args: argparse.Namespace, s: _Settings, g: _Grid, jobs: list[Job], 
     """Run the jobs, appending each result to episodes.jsonl as it comes; Ctrl-C, SIGTERM and
     SIGHUP stop the workers and keep what finished.  Returns (stats or None when stopped, the
     stopping signal or None, wall seconds)."""
-    from capmj.bench.grid import AgentSpec, run_jobs_to_file
-    from capmj.bench.results import EPISODES, ResultsWriter
+    from capmj.bench.executor import Execution
+    from capmj.bench.grid import run_jobs_to_file
+    from capmj.bench.pool import stop_resource_tracker
+    from capmj.bench.results import ResultsWriter
+    from capmj.bench.rundir import RunDir
+    from capmj.bench.worker import AgentSpec
 
     interrupted: int | None = None
     stats: GridStats | None
     t0 = time.perf_counter()
-    with ResultsWriter(s.out / EPISODES) as writer, _stop_on_signals():
+    run_dir = RunDir(s.out)
+    execution = Execution(s.workers, s.concurrency, args.max_llm_concurrency, args.executor, args.ray_address)
+    with ResultsWriter(run_dir.episodes) as writer, _stop_on_signals():
         try:
-            stats = run_jobs_to_file(jobs, AgentSpec(s.agent_name, s.options, s.images), workers=s.workers,
-                                     out_dir=s.out, writer=writer, progress=progress, registered=g.registered,
-                                     concurrency=s.concurrency, max_llm_concurrency=args.max_llm_concurrency,
-                                     executor=args.executor, ray_address=args.ray_address, stop=budget.stop)
+            stats = run_jobs_to_file(jobs, AgentSpec(s.agent_name, s.options, s.images), execution, run_dir=run_dir,
+                                     writer=writer, progress=progress, registered=g.registered, stop=budget.stop)
         except KeyboardInterrupt as exc:
             interrupted = getattr(exc, "signum", signal.SIGINT)
             stats = None
-            _stop_resource_tracker()
+            stop_resource_tracker()
         finally:
             progress.close()
     return stats, interrupted, time.perf_counter() - t0
@@ -541,21 +508,6 @@ def _stop_on_signals() -> Iterator[None]:
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old)
-
-
-def _stop_resource_tracker() -> None:
-    """End multiprocessing's resource-tracker process now rather than when this process exits.
-
-    The workers are dead by now; the tracker would otherwise outlive them while the summary is
-    written, and with it a stopped run's process tree (CI cancels and ``timeout`` wait for it).
-    """
-    try:
-        from multiprocessing import resource_tracker
-
-        stop = getattr(resource_tracker._resource_tracker, "_stop")  # private (not in typeshed), stable since 3.8
-        stop()
-    except Exception:  # noqa: BLE001 - best effort; the tracker ends with us anyway
-        pass
 
 
 def report_main(argv: Sequence[str]) -> int:
