@@ -13,11 +13,10 @@ import signal
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Protocol, Sequence
 
+from capmj.bench.options import EXECUTORS
 from capmj.bench.worker import AgentSpec, Job, failed_record
 from capmj.errors import ConfigError, InfrastructureError
 from capmj.records import EpisodeResult
-
-EXECUTORS = ("local", "ray")
 
 OnResult = Callable[[Job, EpisodeResult], None]
 """What an executor calls with every finished episode, in the parent process."""
@@ -108,5 +107,5 @@ def describe_exit_codes(codes: Sequence[int]) -> str:
     return " (" + ", ".join(parts) + ")"
 
 
-__all__ = ["EXECUTORS", "Execution", "Executor", "GridStats", "OnResult", "RecordSink", "crash_error",
+__all__ = ["Execution", "Executor", "GridStats", "OnResult", "RecordSink", "crash_error",
            "describe_exit_codes"]
