@@ -1,7 +1,8 @@
 """Shared runner of ``oracle.py`` and ``reference.py``: one agent over tasks × test seeds.
 
-Episodes are spread over ``--workers`` processes one (task, seed) at a time, so the load stays
-balanced and each finished episode is printed at once: one JSON line per episode on stderr
+Episodes are spread over ``--workers`` spawned processes (:func:`capmj.bench.pool.spawn_pool`), one
+(task, seed) at a time, so the load stays balanced and each finished episode is printed at once:
+one JSON line per episode on stderr
 (task, seed, success, primitives, wall seconds, error, diagnostics), then one per task, and last
 a summary JSON object on stdout: success rate, mean primitives and wall seconds per task, and
 every failure with its seed, goal, error and diagnostics.  Results do not depend on the number of
@@ -14,8 +15,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 
+from capmj.bench.pool import spawn_pool
 from capmj.tasks.registry import get_task, resolve
 
 
@@ -63,7 +65,7 @@ def main(kind: str, doc: str, argv: list[str] | None = None) -> int:
                   file=sys.stderr, flush=True)
 
     if args.workers > 1:
-        with ProcessPoolExecutor(args.workers) as pool:
+        with spawn_pool(args.workers) as pool:  # spawn, not the platform's fork: MuJoCo/EGL do not survive it
             futures = [pool.submit(run_one, kind, name, seed) for name, seed in jobs]
             for f in as_completed(futures):
                 record(f.result())

@@ -24,10 +24,9 @@ import math
 import sys
 import time
 from collections import Counter
-from concurrent.futures import ProcessPoolExecutor
-
 import numpy as np
 
+from capmj.bench.pool import spawn_pool
 from capmj.tasks.registry import resolve
 
 
@@ -122,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}), file=sys.stderr, flush=True)
 
     if args.workers > 1:
-        with ProcessPoolExecutor(args.workers) as pool:
+        with spawn_pool(args.workers) as pool:  # spawn, not fork: the workers render with EGL
             for batch in pool.map(run_scene, *zip(*jobs), [states] * len(jobs)):
                 record(batch)
     else:

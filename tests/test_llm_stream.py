@@ -81,8 +81,8 @@ def test_cut_at_stop_takes_the_earliest_sequence() -> None:
 
 
 def test_the_bench_and_the_generator_share_the_llm_flags(tmp_path: Path) -> None:
-    from capmj.bench.cli import LLM_OPTIONS as BENCH_AGENT_OPTIONS
     from capmj.bench.cli import build_parser as bench_parser
+    from capmj.bench.options import AGENT_OPTIONS as BENCH_AGENT_OPTIONS
     from capmj.generate.cli import parser as generate_parser
     from capmj.llm.options import LLM_OPTIONS, llm_values
 

@@ -280,7 +280,8 @@ def test_llm_cli_flags_and_the_large_grid_question(capsys: pytest.CaptureFixture
 
 def test_the_documented_local_llm_command_parses() -> None:
     from capmj.agents.factory import make_agent
-    from capmj.bench.cli import LLM_OPTIONS, build_parser
+    from capmj.bench.cli import build_parser
+    from capmj.bench.options import given_agent_options
 
     doc = (REPO / "docs" / "llm.md").read_text()
     section = doc.split("## Local model (llama.cpp)")[1].split("\n## ")[0]
@@ -288,7 +289,7 @@ def test_the_documented_local_llm_command_parses() -> None:
     argv = command.replace("\\\n", " ").split()
     args = build_parser().parse_args(argv)
     assert args.model == "openai/qwen2.5-coder-1.5b" and args.api_base == "http://127.0.0.1:8080/v1"
-    options = {k: getattr(args, k) for k in LLM_OPTIONS}
+    options = given_agent_options(args)
     a = make_agent("llm", **options)
     assert a.config.timeout_s >= 300 and a.config.api_base == "http://127.0.0.1:8080/v1"
 

@@ -208,7 +208,9 @@ def test_run_stopped_by_cost_resumes_to_completion_with_cost_in_the_summary(run_
     md = (run_a / "summary.md").read_text()
     assert "## Failures" in md and "## LLM usage and cost" in md and "(n=2)" in md
     cfg = json.loads((run_a / "config.json").read_text())
-    assert cfg["args"]["run_budget"]["max_cost_usd"] == 100 and cfg["manifest"]["price"]
+    # the first part's limit stays recorded; the resume's is a recorded change
+    assert cfg["args"]["run_budget"]["max_cost_usd"] == 0.001 and cfg["manifest"]["price"]
+    assert cfg["resumes"][-1]["changed"] == {"run_budget.max_cost_usd": {"from": 0.001, "to": 100}}
 
 
 def test_unknown_price_is_unknown_and_cannot_cap_cost(stub: StubLLMServer, tmp_path: Path, capsys) -> None:

@@ -2,7 +2,7 @@
 
 Why actors, not one Ray task per episode: a fresh Ray worker pays the same seconds of importing
 litellm and MuJoCo as a spawned process, and an LLM episode mostly waits.  So each of ``--workers``
-actors is a long-lived process built once (the same :func:`~capmj.bench.grid.init_worker` as the
+actors is a long-lived process built once (the same :class:`~capmj.bench.worker.Worker` as the
 local pool) that runs up to ``--concurrency`` episodes at once in its threads
 (``max_concurrency``); every episode is still its own Ray call, so results stream back one by one to
 the parent's single ``episodes.jsonl`` writer and resume, crash accounting and summaries are the
@@ -24,9 +24,9 @@ import threading
 from collections import deque
 from typing import Any, Callable, Iterable, Sequence
 
-from capmj.bench.grid import AgentSpec, GridStats, Job, RecordSink, crash_error, init_worker, run_job
+from capmj.bench.executor import Execution, GridStats, OnResult, RecordSink, crash_error
+from capmj.bench.worker import AgentSpec, Job, Worker, ignore_sigint
 from capmj.errors import ConfigError, WorkerCrash, WorkerError, describe
-from capmj.records import EpisodeResult
 
 FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "OPENAI_API_KEY",
                  "ANTHROPIC_API_KEY", "LITELLM_LOCAL_MODEL_COST_MAP")
@@ -45,29 +45,28 @@ class EpisodeActor:
     """One worker on the cluster: builds the agent once, runs episodes in up to K threads."""
 
     def __init__(self, spec: AgentSpec, registered: bytes | None, llm_limit: int | None) -> None:
+        ignore_sigint()
         gate = threading.BoundedSemaphore(llm_limit) if llm_limit else None
-        init_worker(spec, registered, gate)
+        self.worker = Worker(spec, registered, gate)
 
     def run(self, job: Job) -> dict[str, Any]:
-        return run_job(job)
+        return self.worker.run_job(job)
 
 
-class RayGrid(RecordSink):
-    """Same contract as :class:`~capmj.bench.grid.Grid`: ``run(jobs)`` hands each record to ``on_result``."""
+class RayExecutor(RecordSink):
+    """The :class:`~capmj.bench.executor.Executor` on Ray: ``run(jobs)`` hands each record to ``on_result``."""
 
-    def __init__(self, agent: AgentSpec, *, workers: int, on_result: Callable[[Job, EpisodeResult], None],
-                 registered: Sequence[Any] = (), concurrency: int = 1, max_llm_concurrency: int | None = None,
-                 address: str | None = None, stop: Callable[[], bool] | None = None) -> None:
-        self.agent = agent
-        self.workers = max(1, int(workers))
-        self.concurrency = max(1, int(concurrency))
-        self.on_result = on_result
+    def __init__(self, agent: AgentSpec, execution: Execution, *, on_result: OnResult,
+                 registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None) -> None:
+        super().__init__(agent, on_result)
+        self.workers = max(1, execution.workers)
+        self.concurrency = execution.concurrency
         self.registered = pickle.dumps(list(registered)) if registered else None
         # A cluster-wide semaphore would cost a round trip per request; each actor gets its share.
-        self.llm_limit = None if not max_llm_concurrency else max(1, -(-max_llm_concurrency // self.workers))
-        self.address = address
+        limit = execution.max_llm_concurrency
+        self.llm_limit = None if not limit else max(1, -(-limit // self.workers))
+        self.address = execution.ray_address
         self.stop = stop or (lambda: False)  # checked before each new episode (run budget)
-        self.stats = GridStats()
 
     def run(self, jobs: Iterable[Job]) -> GridStats:
         jobs = list(jobs)
@@ -165,4 +164,4 @@ class RayGrid(RecordSink):
             self._emit(job, rec)
 
 
-__all__ = ["EpisodeActor", "FORWARDED_ENV", "RayGrid", "import_ray"]
+__all__ = ["EpisodeActor", "FORWARDED_ENV", "RayExecutor", "import_ray"]

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from capmj.bench.migrate import as_record
+from capmj.bench.config import effective_args
 from capmj.bench.results import CONFIG, EPISODES, load_json, read_records, sanitize
 from capmj.errors import CapmjError, ConfigError
 from capmj.records import EpisodeRecord, EpisodeResult
@@ -67,7 +68,7 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
     config = load_json(run_dir / CONFIG)
     if config is None or not (run_dir / EPISODES).is_file():
         raise ConfigError(f"{run_dir} is not a result folder (needs {CONFIG} and {EPISODES})")
-    args = config.get("args") or {}
+    args = effective_args(config)  # the settings the run's latest part ran with
     agent_name = args.get("agent") or "oracle"
     options = dict(args.get("agent_options") or {})
     if agent_name == "llm":

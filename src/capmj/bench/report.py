@@ -30,6 +30,7 @@ from capmj.bench.results import (
     wilson,
     write_result_json,
 )
+from capmj.bench.options import LABEL_OPTIONS
 from capmj.bench.sections import (
     comparison_section,
     cost_section,
@@ -40,10 +41,6 @@ from capmj.bench.sections import (
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
-
-LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
-                 "perception")
-"""Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
 def _order(task: str) -> tuple[int, str]:

@@ -23,15 +23,11 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from capmj.atomic import write_json_atomic
 from capmj.bench.failures import breakdown
 from capmj.bench.migrate import as_record, load_record
+from capmj.bench.rundir import CONFIG, EPISODES, SUMMARY_JSON, SUMMARY_MD, SUMMARY_PNG
 from capmj.bench.spend import usage
 from capmj.errors import RecordError
 from capmj.records import Episode, EpisodeRecord, Key
 
-EPISODES = "episodes.jsonl"
-CONFIG = "config.json"
-SUMMARY_JSON = "summary.json"
-SUMMARY_MD = "summary.md"
-SUMMARY_PNG = "summary.png"
 SUMMARY_SCHEMA = "capmj.bench-summary/1"
 REQUIRED_KEYS: tuple[str, ...] = ("task", "seed", "agent", "model", "success", "progress", "primitives",
                                   "wall_s", "error", "rrd")

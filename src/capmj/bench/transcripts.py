@@ -15,15 +15,10 @@ from pathlib import Path
 from typing import Any
 
 from capmj.atomic import atomic_write
+from capmj.bench.rundir import RunDir
 from capmj.records import Episode, EpisodeRecord
 
-__all__ = ["read_calls", "transcript_relpath", "write_calls"]
-
-
-def transcript_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
-    from capmj.bench.grid import rrd_relpath
-
-    return "transcripts/" + rrd_relpath(task, seed, agent, model)[len("rrd/"):-len(".rrd")] + ".jsonl"
+__all__ = ["read_calls", "write_calls"]
 
 
 def write_calls(out_dir: str | Path, result: Episode) -> str | None:
@@ -31,8 +26,8 @@ def write_calls(out_dir: str | Path, result: Episode) -> str | None:
     (what the record's ``transcript`` holds), None for an episode without LLM calls."""
     if not result.calls:
         return None
-    rel = transcript_relpath(result.task, result.seed, result.agent, result.model)
-    path = Path(out_dir) / rel
+    rel = RunDir.transcript_relpath(result.task, result.seed, result.agent, result.model)
+    path = RunDir(Path(out_dir)).path(rel)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path, encoding="utf-8") as f:
         for call in result.calls:
@@ -44,5 +39,5 @@ def read_calls(out_dir: str | Path, rec: EpisodeRecord) -> list[dict[str, Any]]:
     """The calls of one episode record ([] for an episode without LLM calls)."""
     if not rec.transcript:
         return [dict(c) for c in rec.calls]  # lines written before transcripts held them inline
-    with open(Path(out_dir) / rec.transcript, encoding="utf-8") as f:
+    with open(RunDir(Path(out_dir)).path(rec.transcript), encoding="utf-8") as f:
         return [json.loads(line) for line in f if line.strip()]

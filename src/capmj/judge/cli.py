@@ -121,7 +121,7 @@ def _write_jsonl(path: Path, rows: Sequence[dict[str, Any]]) -> None:
 
 
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
-    from capmj.bench.cli import parse_seeds
+    from capmj.bench.seeds import parse_seeds
     from capmj.judge.cases import set_digest
     from capmj.judge.evaluate import Judge, JudgeConfig
     from capmj.judge.judgeset import build_set

@@ -1,0 +1,340 @@
+"""The grid command of ``python -m capmj.bench``: configuration → checks → ``config.json`` → the
+episodes still to run → running them → summary files → printed results and the exit code.
+
+The command line is read once, into a frozen :class:`~capmj.bench.config.BenchConfig` (what to run
+and how) and an :class:`Invocation` (where, and how to talk to the user); nothing after
+:func:`run_grid`'s first line sees the argparse namespace.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
+
+from capmj.bench.config import BenchConfig, Given, config_json, stored_config
+from capmj.bench.options import EXECUTION_OPTIONS, given_agent_options, given_values
+from capmj.bench.rundir import RunDir
+from capmj.bench.seeds import TEST_SEEDS, parse_seeds
+from capmj.errors import CapmjError, ConfigError
+
+if TYPE_CHECKING:  # the grid's modules load when a grid runs: importing the CLI stays light
+    from capmj.bench.executor import GridStats
+    from capmj.bench.spend import BudgetTracker
+    from capmj.bench.worker import Job
+    from capmj.records import EpisodeRecord
+
+CONFIRM_LLM_EPISODES = 100
+"""More LLM episodes than this on the default seeds need --seeds or --yes (or a 'y' at the prompt)."""
+STOP_SIGNALS = ("SIGTERM", "SIGHUP")
+"""Signals that stop a run like Ctrl-C does: workers killed, finished episodes kept, resumable."""
+EXIT_BUDGET = 3
+"""Exit code of a run stopped by --max-cost-usd / --max-tokens (resumable with a higher limit)."""
+
+
+@dataclass(frozen=True)
+class Invocation:
+    """What the command line says besides the run's configuration: the folder, resume or not, and
+    how to talk to the user."""
+
+    run_dir: RunDir
+    resume: bool
+    argv: tuple[str, ...]
+    seeds_given: bool
+    yes: bool
+    show_progress: bool
+
+
+def read_command_line(args: argparse.Namespace, argv: Sequence[str]) -> tuple[Invocation, Given]:
+    """The namespace of :func:`capmj.bench.cli.build_parser`, read once."""
+    if args.out is None:
+        if args.resume:
+            raise ConfigError("--resume needs --out DIR (the folder of the run to continue)")
+        out = Path("runs") / time.strftime("%Y%m%d-%H%M%S")
+    else:
+        out = Path(args.out)
+    inv = Invocation(RunDir(out), bool(args.resume), tuple(argv), args.seeds is not None, bool(args.yes),
+                     not args.no_progress)
+    given = Given(tasks=args.tasks, seeds=args.seeds, agent=args.agent, agent_options=given_agent_options(args),
+                  execution=given_values(args, EXECUTION_OPTIONS), log=False if args.no_log else None,
+                  log_images=True if args.log_images else None, max_cost_usd=args.max_cost_usd,
+                  max_tokens=args.max_tokens)
+    return inv, given
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The checked grid: seeds, task names (and hand-registered task objects) and the agent's identity."""
+
+    seeds: list[int]
+    tasks: list[str]
+    registered: list[Any]
+    agent_label: str
+    model: str | None
+    manifest: dict[str, Any]
+
+    def facts(self) -> dict[str, Any]:
+        """What ``config.json`` records of the grid."""
+        return {"tasks": self.tasks, "seeds": self.seeds, "agent": self.agent_label, "model": self.model,
+                "versions": self.manifest["packages"], "manifest": self.manifest}
+
+
+def run_grid(args: argparse.Namespace, argv: Sequence[str]) -> int:
+    """The grid command (see the module docstring)."""
+    inv, given = read_command_line(args, argv)
+    stored = _stored(inv)
+    config = BenchConfig.resolve(given, stored_config(stored) if stored is not None else None)
+    grid = _validate(inv, config, stored)
+    from capmj.bench.results import write_result_json
+
+    write_result_json(inv.run_dir.config, config_json(config, inv.argv, grid.facts(), stored))
+    jobs, budget, total = _plan(inv.run_dir, config, grid)
+    progress = _Progress(budget, len(jobs), show=inv.show_progress)
+    stats, interrupted, elapsed = _execute(inv.run_dir, config, grid, jobs, budget, progress)
+    records, summary = _write_summary(inv.run_dir, config, stats, elapsed, progress, budget)
+    return _print_outcome(inv.run_dir.root, summary, records, total, elapsed, progress, budget, interrupted)
+
+
+def _stored(inv: Invocation) -> dict[str, Any] | None:
+    """The ``config.json`` of the run ``--resume`` continues (None for a new run); a new run's folder
+    must not hold results already."""
+    from capmj.bench.results import load_json
+
+    run = inv.run_dir
+    if not inv.resume:
+        if run.episodes.exists() and run.episodes.stat().st_size > 0:
+            raise ConfigError(f"{str(run.root)!r} already holds results; add --resume to continue that run or "
+                              "choose another --out")
+        return None
+    stored = load_json(run.config)
+    if not run.episodes.exists() and stored is None:
+        raise ConfigError(f"--resume: {str(run.root)!r} holds no run to continue (no {run.episodes.name} or "
+                          f"{run.config.name})")
+    return stored
+
+
+def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | None) -> _Grid:
+    """Seeds, tasks and agent checked (and an LLM grid confirmed) before the folder is touched;
+    then the folder is created and proved writable."""
+    from capmj.agents.factory import make_agent
+    from capmj.bench.manifest import run_manifest
+
+    if config.agent_options.get("attempts") is not None and config.agent_options["attempts"] < 1:
+        raise ConfigError(f"--attempts must be >= 1, got {config.agent_options['attempts']}")
+    seeds = parse_seeds(config.seeds)
+    tasks, registered = _resolve_tasks(config.tasks)
+    agent = make_agent(config.agent, **config.agent_options)  # validates name and options; workers build their own
+    _confirm_llm_grid(inv, config.agent, len(tasks) * len(seeds))
+    agent_label, model = getattr(agent, "name", config.agent), getattr(agent, "model", None)
+    config.run_budget.check_price(agent)
+    manifest = run_manifest(agent, tasks, stored)
+    prepare_out(inv.run_dir.root)
+    return _Grid(seeds, tasks, registered, agent_label, model, manifest)
+
+
+def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
+    """Task names of a selector, each checked to load; plus the hand-registered task objects."""
+    from capmj.tasks import registry
+
+    names = registry.resolve(selector)
+    registered = []
+    infos = {i.name: i for i in registry.list_tasks()}
+    for n in names:
+        try:
+            task = registry.get_task(n)
+        except CapmjError as exc:
+            raise ConfigError(f"task {n!r} is unusable: {one_line(str(exc))}") from None
+        if n in infos and infos[n].distribution == registry.REGISTERED:
+            registered.append(task)
+    if not names:
+        raise ConfigError(f"task selection {selector!r} matches no usable task")
+    return names, registered
+
+
+def _confirm_llm_grid(inv: Invocation, agent: str, n: int) -> None:
+    """Ask before a default-seed LLM grid of more than CONFIRM_LLM_EPISODES episodes starts."""
+    if agent != "llm" or n <= CONFIRM_LLM_EPISODES or inv.seeds_given or inv.yes or inv.resume:
+        return
+    what = f"this would start {n} LLM episodes on the default test seeds ({TEST_SEEDS})"
+    if sys.stdin is not None and sys.stdin.isatty():
+        if input(f"capmj-bench: {what}. Continue? [y/N] ").strip().lower() in ("y", "yes"):
+            return
+    raise ConfigError(f"{what}; give --seeds explicitly (e.g. --seeds 10001:10011:2) or add --yes")
+
+
+def _plan(run: RunDir, config: BenchConfig, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
+    """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
+    and the grid's size; prints the plan to stderr."""
+    from capmj.bench.results import read_records
+    from capmj.bench.spend import BudgetTracker
+    from capmj.bench.worker import Job
+
+    existing, bad = read_records(run.episodes)
+    done = {r.key for r in existing}
+    budget = BudgetTracker(config.run_budget, existing)
+    jobs = []
+    for t in g.tasks:
+        for seed in g.seeds:
+            if (t, seed, g.agent_label, g.model) in done:
+                continue
+            rrd = str(run.rrd(t, seed, g.agent_label, g.model)) if config.log else None
+            jobs.append(Job(t, seed, rrd))
+    total = len(g.tasks) * len(g.seeds)
+    e = config.execution
+    print(f"capmj-bench: {len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "
+          f"{g.agent_label}" + (f" ({g.model})" if g.model else "") + f"; {total - len(jobs)} already done, "
+          f"{len(jobs)} to run on {e.workers} worker(s) × {e.concurrency} in flight; results in {run.root}"
+          + (f" (skipped {bad} truncated line(s))" if bad else ""),
+          file=sys.stderr)
+    return jobs, budget, total
+
+
+class _Progress:
+    """Called with every finished episode: feeds the run budget, counts, and moves the progress bar
+    (a tqdm bar on stderr, when shown and there is something to run)."""
+
+    def __init__(self, budget: BudgetTracker, n_jobs: int, *, show: bool) -> None:
+        self.budget = budget
+        self.n = 0
+        self.ok = 0
+        self.bar: Any = None
+        if show and n_jobs:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=n_jobs, file=sys.stderr, unit="ep", dynamic_ncols=True, mininterval=0.5,
+                            desc="episodes")
+
+    def __call__(self, rec: EpisodeRecord) -> None:
+        self.budget.add(rec)
+        self.n += 1
+        self.ok += rec.success
+        if self.bar is not None:
+            self.bar.set_postfix_str(f"success {100 * self.ok / self.n:.0f}% ({self.ok}/{self.n})", refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: list[Job], budget: BudgetTracker,
+             progress: _Progress) -> tuple[GridStats | None, int | None, float]:
+    """Run the jobs, appending each result to episodes.jsonl as it comes; Ctrl-C, SIGTERM and
+    SIGHUP stop the workers and keep what finished.  Returns (stats or None when stopped, the
+    stopping signal or None, wall seconds)."""
+    from capmj.bench.grid import run_jobs_to_file
+    from capmj.bench.pool import stop_resource_tracker
+    from capmj.bench.results import ResultsWriter
+
+    interrupted: int | None = None
+    stats: GridStats | None
+    t0 = time.perf_counter()
+    with ResultsWriter(run.episodes) as writer, _stop_on_signals():
+        try:
+            stats = run_jobs_to_file(jobs, config.agent_spec, config.execution, run_dir=run, writer=writer,
+                                     progress=progress, registered=g.registered, stop=budget.stop)
+        except KeyboardInterrupt as exc:
+            interrupted = getattr(exc, "signum", signal.SIGINT)
+            stats = None
+            stop_resource_tracker()
+        finally:
+            progress.close()
+    return stats, interrupted, time.perf_counter() - t0
+
+
+def _write_summary(run: RunDir, config: BenchConfig, stats: GridStats | None, elapsed: float, progress: _Progress,
+                   budget: BudgetTracker) -> tuple[list[EpisodeRecord], dict[str, Any]]:
+    """summary.json/md/png over every episode in the folder (earlier runs' included), with this
+    run's own figures under "run"; returns the records and the summary."""
+    from capmj.bench.report import write_summary
+    from capmj.bench.results import read_records, summarize
+
+    records, _ = read_records(run.episodes)
+    summary = summarize(records)
+    summary["run"] = {"elapsed_s": elapsed, "episodes_run": progress.n, "workers": config.execution.workers,
+                      "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
+                      "stopped_by_budget": budget.reason}
+    write_summary(run.root, summary, title=f"capmj benchmark results ({run.root.name})")
+    return records, summary
+
+
+def _print_outcome(out: Path, summary: dict[str, Any], records: list[EpisodeRecord], total: int, elapsed: float,
+                   progress: _Progress, budget: BudgetTracker, interrupted: int | None) -> int:
+    """Success per configuration on stdout, how to continue a stopped run on stderr; the exit code."""
+    from capmj.bench.report import pct_cell
+    from capmj.bench.rundir import EPISODES
+
+    for label, st in summary["overall"].items():
+        print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
+              f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")
+    print(f"ran {progress.n} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
+    if interrupted is not None:
+        print(f"capmj-bench: interrupted by {signal.Signals(interrupted).name}; continue with: "
+              f"python -m capmj.bench --out {out} --resume", file=sys.stderr)
+        return 128 + int(interrupted)
+    if budget.reason and len(records) < total:
+        print(f"capmj-bench: run budget reached: {budget.reason}; {total - len(records)} episode(s) not started. "
+              f"Continue with: python -m capmj.bench --out {out} --resume --max-cost-usd/--max-tokens <higher limit>",
+              file=sys.stderr)
+        return EXIT_BUDGET
+    return 0
+
+
+class Stopped(KeyboardInterrupt):
+    """A stop signal (SIGTERM/SIGHUP) delivered to the bench: handled exactly like Ctrl-C."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def _stop_on_signals() -> Iterator[None]:
+    """Turn SIGTERM and SIGHUP into :class:`Stopped` in the main thread while a grid runs.
+
+    Without this a ``kill``, a CI cancel or a closed terminal ends the parent at once and orphans
+    its spawn workers (and multiprocessing's resource tracker), which then hold stdout open forever;
+    with it the grid's cleanup kills the workers and the folder stays resumable.
+    """
+    def handler(signum: int, frame: Any) -> None:
+        raise Stopped(signum)
+
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in STOP_SIGNALS:
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                previous[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+def one_line(msg: str) -> str:
+    return " ".join(str(msg).split())
+
+
+def prepare_out(path: Path) -> Path:
+    """Create the result folder and prove it is writable; ``ConfigError`` otherwise."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / f".write-probe-{os.getpid()}"
+        with open(probe, "w") as f:
+            f.write("ok")
+        probe.unlink()
+    except OSError as exc:
+        raise ConfigError(f"output folder {str(path)!r} is not writable: {exc.strerror or exc}") from None
+    return path
+
+
+__all__ = ["CONFIRM_LLM_EPISODES", "EXIT_BUDGET", "Invocation", "STOP_SIGNALS", "Stopped", "one_line", "prepare_out",
+           "read_command_line", "run_grid"]

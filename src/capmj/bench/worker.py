@@ -1,0 +1,179 @@
+"""The worker side of a grid: what runs episodes, in a pool process, a Ray actor or the caller.
+
+A :class:`Worker` builds its agent once, looks tasks up in the registry (cached per process) and
+turns every episode into a result record, never an exception: a broken plugin, an unwritable log
+or an agent that cannot be built fails its own episodes only.  Every executor
+(:mod:`capmj.bench.grid`, :mod:`capmj.bench.ray_executor`) runs episodes through one, so they
+cannot drift apart in what an episode's record holds.
+"""
+
+from __future__ import annotations
+
+import pickle
+import queue
+import signal
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+from capmj.bench.results import sanitize
+from capmj.errors import describe, error_facts
+from capmj.records import EpisodeResult
+
+
+@dataclass(frozen=True)
+class Job:
+    """One episode to run: ``rrd`` is the absolute log path, or None for no log."""
+
+    task: str
+    seed: int
+    rrd: str | None = None
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """How workers build the agent: factory name and options (``None`` options are dropped)."""
+
+    name: str
+    options: Mapping[str, Any] = field(default_factory=dict)
+    images: bool = False
+
+    @property
+    def model(self) -> str | None:
+        """The model named in the options (the agent may resolve another; records use the agent's)."""
+        return self.options.get("model")
+
+
+def failed_record(task: str, seed: int, agent: str, model: str | None, error: str, error_type: str | None,
+                  **extra: Any) -> dict[str, Any]:
+    """A result line for an episode that produced no result of its own (worker crash, bad task);
+    ``error_type`` names the class of the failure (:mod:`capmj.errors`)."""
+    rec = EpisodeResult(task, seed, agent, model, False, 0.0, 0.0, 0, 0, 0.0, 0.0, error,
+                        error_type=error_type).to_dict()
+    rec.update(extra)
+    return rec
+
+
+def ignore_sigint() -> None:
+    """In a worker process: Ctrl-C is the parent's business (it stops the grid and kills workers)."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        pass
+
+
+class Worker:
+    """Runs episodes of one agent configuration; several at once in threads (``--concurrency``).
+
+    ``registered`` holds tasks registered by hand in the parent (pickled), which a spawned process
+    would not know.  ``llm_gate`` bounds the LLM requests in flight (``--max-llm-concurrency``): a
+    process-shared semaphore across pool workers, a thread one in a Ray actor or in process; it is
+    handed to :mod:`capmj.llm.client`.
+    """
+
+    def __init__(self, spec: AgentSpec, registered: bytes | None = None, llm_gate: Any = None) -> None:
+        self.spec = spec
+        self._idle: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._threads: ThreadPoolExecutor | None = None
+        self._thread_count = 0
+        self._init_error: tuple[str, str | None] | None = None
+        if llm_gate is not None:
+            from capmj.llm.client import set_request_gate
+
+            set_request_gate(llm_gate)
+        try:
+            if registered:
+                from capmj.tasks import registry
+
+                for task in pickle.loads(registered):
+                    registry.register(task, replace=True)
+            self._idle.put(self._build_agent())
+        except Exception as exc:  # noqa: BLE001 - reported per episode instead of breaking the pool
+            self._init_error = (describe(exc), error_facts(exc)[0])
+
+    def _build_agent(self) -> Any:
+        from capmj.agents.factory import make_agent
+
+        return make_agent(self.spec.name, **dict(self.spec.options))
+
+    def _take_agent(self) -> Any:
+        """An agent no other episode is using: agents keep per-episode state (client, transcript), so
+        concurrent episodes in one worker each get their own instance, reused afterwards."""
+        try:
+            return self._idle.get_nowait()
+        except queue.Empty:
+            return self._build_agent()
+
+    def run_job(self, job: Job) -> dict[str, Any]:
+        """Run one episode; always returns a result record (never raises for the episode)."""
+        if self._init_error is not None:
+            return failed_record(job.task, job.seed, self.spec.name, self.spec.model, *self._init_error)
+        agent = self._take_agent()
+        try:
+            return self._run_with(agent, job)
+        finally:
+            self._idle.put(agent)
+
+    def _run_with(self, agent: Any, job: Job) -> dict[str, Any]:
+        model = getattr(agent, "model", None)
+        name = getattr(agent, "name", self.spec.name)
+        try:
+            from capmj.tasks.registry import get_task
+
+            task = get_task(job.task)
+        except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
+            return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
+        from capmj.runner import record_episode
+
+        try:
+            result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
+        except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
+            return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
+        return sanitize(result.to_dict())
+
+    def run_batch(self, jobs: Sequence[Job]) -> list[dict[str, Any]]:
+        """Run a batch of episodes concurrently, one thread each (``--concurrency``).
+
+        While one episode waits on the LLM another simulates: MuJoCo releases the GIL while stepping and
+        an HTTP wait holds nothing.  Each episode has its own world, agent, RNG streams and budgets; the
+        sandbox traces per thread.  Records come back in the order of ``jobs``.
+        """
+        if len(jobs) == 1:
+            return [self.run_job(jobs[0])]
+        if self._threads is None or self._thread_count < len(jobs):
+            if self._threads is not None:
+                self._threads.shutdown(wait=False)
+            self._threads = ThreadPoolExecutor(max_workers=len(jobs), thread_name_prefix="episode")
+            self._thread_count = len(jobs)
+        return list(self._threads.map(self.run_job, jobs))
+
+    def close(self) -> None:
+        """Wait for the episode threads (in-process runs: nothing may outlive the grid)."""
+        if self._threads is not None:
+            self._threads.shutdown(wait=True)
+            self._threads = None
+
+
+# ---------------------------------------------------------------------- in a pool process
+_pool_worker: Worker | None = None
+"""The :class:`Worker` of this pool process.  A ``ProcessPoolExecutor`` initializer can hand state
+to the calls that follow only through the process itself, so this one slot is set by
+:func:`init_pool_worker` in spawned pool processes, and by nothing else (the in-process executor
+and Ray actors hold their own ``Worker``)."""
+
+
+def init_pool_worker(spec: AgentSpec, registered: bytes | None = None, llm_gate: Any = None) -> None:
+    """Pool initializer: this process's :class:`Worker`."""
+    global _pool_worker
+    ignore_sigint()
+    _pool_worker = Worker(spec, registered, llm_gate)
+
+
+def run_pool_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
+    """What the pool's parent submits: a batch for this process's worker."""
+    if _pool_worker is None:
+        raise RuntimeError("run_pool_batch runs in a pool process started with init_pool_worker")
+    return _pool_worker.run_batch(jobs)
+
+
+__all__ = ["AgentSpec", "Job", "Worker", "failed_record", "ignore_sigint", "init_pool_worker", "run_pool_batch"]
