@@ -71,7 +71,7 @@ class GeneratorScript:
     def _about(self, request: dict[str, Any]) -> ScriptedCandidate:
         text = prompt_text(request)
         for c in self.candidates:
-            if f'"name": "{c.name}"' in text or f"  name: {c.name}\n" in text:  # proposal JSON or task_api.txt
+            if f'"name": "{c.name}"' in text or f"  name: {c.name}\n" in text:  # proposal JSON or pick.txt
                 return c
         raise AssertionError(f"no scripted candidate in conversation: {text[:300]!r}")
 
@@ -81,7 +81,7 @@ class GeneratorScript:
             c = self.candidates[int(re.search(r"proposal (\d+) of", last).group(1)) - 1]  # type: ignore[union-attr]
             return json.dumps({"name": c.name, "goal": c.goal, "objects": ["blocks", "zones"], "why": "scripted"})
         c = self._about(request)
-        if "Pick the 2 or 3 existing tasks" in last:
+        if "Pick the 2 existing tasks" in last:
             return json.dumps(EXAMPLE_PICKS)
         if "Now write the complete module" in last:
             return f"Here is the module.\n```python\n{c.code}```\n"

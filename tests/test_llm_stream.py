@@ -95,3 +95,31 @@ def test_the_bench_and_the_generator_share_the_llm_flags(tmp_path: Path) -> None
     assert {k: gen[k] for k in expected} == {k: bench[k] for k in expected} == expected
     assert gen["temperature"] == 0.0 and bench["temperature"] is None  # the bench resolves its defaults later
     assert {o.field for o in LLM_OPTIONS} <= set(BENCH_AGENT_OPTIONS)  # every shared flag reaches the agent
+
+
+def test_a_repetition_loop_is_cut_and_the_stream_closed_early(server: StubLLMServer, tmp_path: Path) -> None:
+    """A model looping on one comment line until its token limit (seen with the 1.5B model):
+    the client stops reading after eight copies and keeps one; the cut answer is what is cached."""
+    loop = "# put the red block on the blue block\n" * 150  # 8 words per line: 1 200 chunks, 24 s
+    server.script(Reply.trickle("put_first_on_second(a, b)\n\n" + loop, 0.02))
+    c = client(server, cache_dir=tmp_path)
+    t0 = time.monotonic()
+    done = c.complete(HELLO, purpose="plan")
+    assert time.monotonic() - t0 < 12
+    assert done.text == "put_first_on_second(a, b)\n\n# put the red block on the blue block" and done.cut == "repetition"
+    assert c.records[-1].cut == "repetition"
+    server.reset()
+    again = client(server, cache_dir=tmp_path).complete(HELLO, purpose="plan")
+    assert again.cached and again.text == done.text and server.requests == []
+
+
+def test_repetition_cut_needs_a_real_loop() -> None:
+    from capmj.llm.stream import repetition_cut
+
+    plan = "".join(f"put_first_on_second(blocks[{i}], zone)\n" for i in range(12))
+    assert repetition_cut(plan) is None  # distinct lines
+    assert repetition_cut("x = 1\n" * 7) is None  # seven copies: below the line limit
+    block = "pick(a)\nplace(a)\n"
+    assert repetition_cut("go()\n" + block * 3) is None
+    text = "go()\n" + block * 4 + "pick("
+    assert text[: repetition_cut(text)] == "go()\npick(a)\nplace(a)"

@@ -103,6 +103,7 @@ class LMPCall:
     error: str | None = None
     cached: bool | None = None
     partial: str | None = None
+    cut: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -179,6 +180,8 @@ class LMPSession:
             raise
         call.cached = bool(getattr(completion, "cached", False))
         self.record(call, "completion", completion.text)
+        if getattr(completion, "cut", None):
+            self.record(call, "cut", completion.cut)
         return completion.text
 
     def messages(self, user: str) -> list[dict[str, Any]]:

@@ -4,7 +4,7 @@ Allowing a *module* lets everything that module imported come along as an attrib
 (``registry.os``, ``typing.sys``, ``numpy.f2py.os``).  So the allow-list names every module a
 task may import together with the members it may use from it; an attribute of a module object
 outside its list is rejected by :mod:`capmj.confine.names`.  The same table renders the
-"Imports allowed" line and the API reference of ``prompts/generator/task_api.txt``
+"Imports allowed" line and the API reference of ``prompts/generator/task_api.txt`` (the writing turn)
 (:func:`allowed_imports_text`, :func:`capmj.generate.library.api_reference`), so what the model
 is told and what the check accepts are one fact.
 

@@ -4,8 +4,9 @@ Stages (the record's ``stage`` is the last one reached; ``accepted`` only after 
 
 1. ``propose``: bottom-up, the LLM proposes ``{name, goal, objects, why}``; top-down, the user's
    name and description are the proposal.
-2. ``examples``: the LLM reads the task API and picks 2–3 similar installed tasks.
-3. ``write``: it receives their source and writes the module.
+2. ``examples``: the LLM picks the 2 installed tasks most like the proposal.
+3. ``write``: it receives their source and writes the module (the task API is in the system
+   message, :func:`system_prompt`).
 4. ``static``: parse, import allow-list, forbidden names (AST only, nothing runs), then in the
    limited worker: import and the registry's validation (``load``, ``protocol``).  One repair
    round on failure, with the error or traceback.
@@ -82,8 +83,21 @@ class Context:
     workdir: Path
 
 
-def _library_lines(lib: tuple[LibraryTask, ...], summary: bool = False) -> str:
-    return "\n".join(f"- {t.name}: {t.summary if summary else t.goal}" for t in lib) or "(none installed)"
+def _library_lines(lib: tuple[LibraryTask, ...]) -> str:
+    return "\n".join(f'- {t.name}: {t.summary} (e.g. "{t.goal}")' for t in lib) or "(none installed)"
+
+
+def system_prompt(library: tuple[LibraryTask, ...]) -> str:
+    """The first message of every candidate: the role, the whole task API and the installed library.
+
+    Why everything static goes first: it is the same for every candidate and turn of a run, so a
+    server's prefix cache (llama.cpp's slots, OpenAI's prompt caching) reads it once per run; a
+    2-core server reading ~20 tokens/s would otherwise spend minutes per candidate re-reading the
+    ~5k-token reference.  Each turn then adds only what is new: the proposal, the picked sources,
+    a check's error.
+    """
+    task_api = prompts.render("task_api.txt", allowed_imports=allowed_imports_text(), api=api_reference())
+    return prompts.render("system.txt", task_api=task_api, library=_library_lines(library))
 
 
 def _proposal_lines(items: list[dict[str, Any]]) -> str:
@@ -100,7 +114,7 @@ def _propose(ctx: Context, conv: Conversation, rec: CandidateRecord) -> dict[str
     text = prompts.render(
         "propose.txt", index=rec.index + 1, count=cfg.n, kinds=", ".join(KINDS), sizes=", ".join(BLOCK_SIZES),
         colors=", ".join(DEFAULT_COLORS), warm=", ".join(c for c in DEFAULT_COLORS if c in WARM),
-        cool=", ".join(c for c in DEFAULT_COLORS if c in COOL), library=_library_lines(ctx.library),
+        cool=", ".join(c for c in DEFAULT_COLORS if c in COOL),
         accepted=_proposal_lines(ex["accepted"]), rejected=_proposal_lines(ex["rejected"]))
     prop = extract_json(conv.ask(text, "generate.propose"))
     if not isinstance(prop, dict) or not all(isinstance(prop.get(k), str) and prop[k] for k in ("name", "goal")):
@@ -108,20 +122,24 @@ def _propose(ctx: Context, conv: Conversation, rec: CandidateRecord) -> dict[str
     return prop
 
 
+EXAMPLES = 2
+"""Installed tasks whose source the writing turn shows: two teach the structure; a third cost a
+small local model ~1 000 more prompt tokens (a minute of reading) for little."""
+
+
 def _pick_examples(ctx: Context, conv: Conversation, prop: dict[str, Any]) -> list[str]:
-    text = prompts.render(
-        "task_api.txt", name=prop["name"], goal=prop["goal"], objects=json.dumps(prop.get("objects", [])),
-        why=prop.get("why", ""), allowed_imports=allowed_imports_text(), api=api_reference(),
-        library=_library_lines(ctx.library, summary=True))
+    """Ask which installed tasks (listed in the system message) are most like the proposal."""
+    text = prompts.render("pick.txt", name=prop["name"], goal=prop["goal"], objects=json.dumps(prop.get("objects", [])),
+                          why=prop.get("why", ""))
     answer = conv.ask(text, "generate.pick_examples")
     known = {t.name for t in ctx.library}
     try:
         picked = [n for n in extract_json(answer) if isinstance(n, str) and n in known]
     except (ValueError, TypeError):
         picked = []
-    picked = list(dict.fromkeys(picked))[:3]
-    if len(picked) < 2:  # unusable picks: fill deterministically by word overlap
-        picked += [n for n in similar(prop["name"], prop["goal"], ctx.library) if n not in picked][: 3 - len(picked)]
+    picked = list(dict.fromkeys(picked))[:EXAMPLES]
+    if len(picked) < EXAMPLES:  # unusable picks: fill deterministically by word overlap
+        picked += [n for n in similar(prop["name"], prop["goal"], ctx.library) if n not in picked][: EXAMPLES - len(picked)]
     return picked
 
 
@@ -191,8 +209,7 @@ def _reflect(ctx: Context, conv: Conversation, rec: CandidateRecord, attempt: in
     """Ask for the vote and record it; a ``reject`` vote rejects, anything else leaves the checks' verdict."""
     rec.stage = "reflection"
     lines = "\n".join(f"- {c['name']}: {c['detail']}" for c in rec.checks if c["outcome"] == "pass" and c["attempt"] == attempt)
-    answer = conv.ask(prompts.render("reflect.txt", name=rec.name, checks=lines,
-                                     existing=", ".join(t.name for t in ctx.library)), "generate.reflect")
+    answer = conv.ask(prompts.render("reflect.txt", name=rec.name, checks=lines), "generate.reflect")
     try:
         vote = extract_json(answer)
         rec.reflection = {"vote": str(vote.get("vote", "")).lower(), "reason": str(vote.get("reason", ""))}
@@ -208,7 +225,7 @@ def _reflect(ctx: Context, conv: Conversation, rec: CandidateRecord, attempt: in
 def run_candidate(ctx: Context, index: int) -> CandidateRecord:
     """Take candidate ``index`` through every stage; never raises for the candidate's own faults."""
     rec = CandidateRecord(index, ctx.cfg.mode)
-    conv = Conversation(ctx.client, prompts.read("system.txt").strip())
+    conv = Conversation(ctx.client, system_prompt(ctx.library))
     t0 = time.perf_counter()
     try:
         prop = _propose(ctx, conv, rec)
@@ -236,4 +253,4 @@ def run_candidate(ctx: Context, index: int) -> CandidateRecord:
     return rec
 
 
-__all__ = ["CandidateRecord", "Context", "run_candidate"]
+__all__ = ["CandidateRecord", "Context", "run_candidate", "system_prompt"]

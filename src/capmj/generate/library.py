@@ -63,19 +63,67 @@ def similar(name: str, goal: str, library: tuple[LibraryTask, ...], k: int = 3) 
     return [t.name for t in scored[:k]]
 
 
+LONG_DEFAULT = 24
+"""A default whose repr is longer than this is shown by the name of the module constant equal to
+it (``SPAWN_BOUNDS``, ``DEFAULT_COLORS``) or as ``...``: the reference is read by small models at
+~20-50 tokens/s, and a repeated 80-character tuple teaches nothing."""
+
+
+def _value(v: object, module: ModuleType) -> str:
+    """A short text for a default or a constant: floats to 4 significant digits, long values by
+    the name of an equal public constant of ``module``."""
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    text = repr(v)
+    if len(text) <= LONG_DEFAULT:
+        return text
+    for name, const in vars(module).items():
+        if name.isupper() and type(const) is type(v):
+            try:
+                if const == v:
+                    return name
+            except Exception:  # noqa: BLE001,S112 - an odd __eq__ only loses the short name
+                continue
+    return "..."
+
+
+def _signature(obj: object, module: ModuleType) -> str:
+    """``(a: T, b: U = d) -> R`` without the quotes of postponed annotations, long defaults named
+    (:func:`_value`) and no ``-> None`` on classes."""
+    try:
+        sig = inspect.signature(obj)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return ""
+    parts, star = [], False
+    for p in sig.parameters.values():
+        if p.kind is p.KEYWORD_ONLY and not star:
+            parts.append("*")
+            star = True
+        prefix = "*" if p.kind is p.VAR_POSITIONAL else "**" if p.kind is p.VAR_KEYWORD else ""
+        star = star or p.kind is p.VAR_POSITIONAL
+        text = prefix + p.name
+        if p.annotation is not p.empty:
+            text += f": {str(p.annotation).strip(chr(39))}"
+        if p.default is not p.empty:
+            text += f" = {_value(p.default, module)}"
+        parts.append(text)
+    out = f"({', '.join(parts)})"
+    ret = sig.return_annotation
+    if ret is not sig.empty and not inspect.isclass(obj) and str(ret).strip("'") != "None":
+        out += f" -> {str(ret).strip(chr(39))}"
+    return out
+
+
 def _members(module: ModuleType, names: tuple[str, ...]) -> list[str]:
     lines = [f"# {module.__name__}"]
     for n in names:
         obj = getattr(module, n)
-        doc = (inspect.getdoc(obj) or "").strip().split("\n\n")[0].replace("\n", " ")
+        doc = (inspect.getdoc(obj) or "").strip().split("\n\n")[0].replace("\n", " ").replace("``", "`")
         if inspect.isclass(obj) or inspect.isfunction(obj):
-            try:
-                sig = str(inspect.signature(obj))
-            except (TypeError, ValueError):
-                sig = ""
+            sig = _signature(obj, module)
             lines.append(f"{n}{sig}: {doc}" if doc else f"{n}{sig}")
         else:
-            lines.append(f"{n} = {obj!r}")
+            lines.append(f"{n} = {obj:.4g}" if isinstance(obj, float) else f"{n} = {obj!r}")
     return lines
 
 

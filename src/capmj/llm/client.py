@@ -24,7 +24,7 @@ from typing import Any
 
 from capmj.errors import ConfigError, LLMError
 from capmj.llm.cache import CompletionCache, cache_key
-from capmj.llm.stream import StreamCut, cut_at_stop, drain
+from capmj.llm.stream import StreamCut, cut_answer, drain
 
 __all__ = ["CallRecord", "Completion", "DEFAULT_TIMEOUT_S", "LLMClient", "LLMConfig", "Usage", "image_part",
            "set_request_gate", "takes_seed", "text_part"]
@@ -110,6 +110,9 @@ class Completion:
     cached: bool
     attempts: int
     purpose: str
+    cut: str | None = None
+    """``"repetition"`` when the answer ended in a repetition loop that was cut (see
+    :func:`capmj.llm.stream.repetition_cut`); else None."""
 
 
 @dataclass(frozen=True)
@@ -127,6 +130,7 @@ class CallRecord:
     attempts: int
     error: str | None = None
     partial: str | None = None
+    cut: str | None = None
 
 
 @dataclass(frozen=True)
@@ -269,6 +273,7 @@ class LLMClient:
             attempts=attempts,
             error=error,
             partial=partial,
+            cut=c.cut if c else None,
         )
         with self._lock:
             self._records.append(record)
@@ -395,8 +400,10 @@ class LLMClient:
                        purpose: str, stop: tuple[str, ...] = ()) -> Completion:
         usage = getattr(response, "usage", None)
         model = getattr(response, "model", None)
+        text, cut = cut_answer(_text_of(response) or "", stop)
         return Completion(
-            text=cut_at_stop(_text_of(response) or "", stop),
+            text=text,
+            cut=cut,
             model=model if isinstance(model, str) and model else self.config.model,
             prompt_tokens=_int(getattr(usage, "prompt_tokens", 0)),
             completion_tokens=_int(getattr(usage, "completion_tokens", 0)),
