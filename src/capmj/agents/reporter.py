@@ -41,10 +41,14 @@ from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import CapmjError, ConfigError, PlanError, describe
 
-__all__ = ["REPORTERS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict", "make_reporter",
+__all__ = ["REPORTERS", "REPORTER_PROMPTS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict", "make_reporter",
            "parse_verdict", "parse_wrong"]
 
 REPORTERS = ("none", "text", "vlm")
+REPORTER_PROMPTS = ("thesis", "checked")
+"""Prompts of the text reporter (``--reporter-prompt``): ``thesis``, the thesis's checking code
+(:class:`TextReporter`), or ``checked``, facts bound by capmj
+(:class:`capmj.agents.reporter_checked.CheckedReporter`)."""
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
 
@@ -381,9 +385,19 @@ class VLMReporter:
                 self._rig = None
 
 
-def make_reporter(mode: str, prompt_directory: Any = None) -> TextReporter | VLMReporter | None:
+def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis") -> Any:
+    """The reporter of ``mode`` (None for ``none``); ``prompt`` selects the text reporter's prompt."""
+    if prompt not in REPORTER_PROMPTS:
+        raise ConfigError(f"unknown reporter prompt {prompt!r}; valid prompts: {', '.join(REPORTER_PROMPTS)}")
+    if prompt != "thesis" and mode == "vlm":
+        raise ConfigError(f"reporter prompt {prompt!r} is a text-reporter prompt; it needs --reporter text, "
+                          f"not {mode!r}")
     if mode == "none":
         return None
+    if mode == "text" and prompt == "checked":
+        from capmj.agents.reporter_checked import CheckedReporter
+
+        return CheckedReporter(prompt_directory)
     if mode == "text":
         return TextReporter()
     if mode == "vlm":
