@@ -33,7 +33,7 @@ TEST_SEEDS = "10001:10101:2"
 DEFAULT_TASKS = "benchmark"
 LLM_OPTIONS = ("model", "api_base", "reporter", "attempts", "temperature", "on_unknown", "replan_temperature",
                "replan_retries", "timeout_s", "max_tokens", "cache_dir", "cache_only", "episode_max_tokens",
-               "episode_max_cost_usd", "price", "perception")
+               "episode_max_cost_usd", "price", "perception", "loop_policy", "reporter_prompt")
 """The LLM agent's keyword arguments the command line sets (the shared client options among them,
 :data:`capmj.llm.options.LLM_OPTIONS`, by their ``LLMConfig`` field names); ``perception`` is also
 the reference agent's."""
@@ -89,6 +89,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--attempts", type=int, default=None, metavar="N", help="plan attempts (closed loop)")
     g.add_argument("--on-unknown", dest="on_unknown", default=None, choices=("replan", "stop"),
                    help="what an unknown reporter verdict does (default: replan)")
+    g.add_argument("--loop-policy", dest="loop_policy", default=None, choices=("thesis", "careful"),
+                   help="what the loop does after an attempt: thesis (default: reset and re-plan after any failure) "
+                        "or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop on "
+                        "a low-confidence one; docs/llm.md)")
+    g.add_argument("--reporter-prompt", dest="reporter_prompt", default=None, choices=("thesis", "checked"),
+                   help="the text reporter's prompt: thesis (default: checking code) or checked (capmj binds the "
+                        "scene facts; docs/judge.md)")
     g.add_argument("--replan-temperature", dest="replan_temperature", type=float, default=None, metavar="T",
                    help="sampling temperature of the planner in attempts 2, 3, ... (default: 0.7)")
     g.add_argument("--replan-retries", dest="replan_retries", type=int, default=None, metavar="N",

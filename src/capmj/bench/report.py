@@ -35,7 +35,8 @@ from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
-LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries")
+LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
+                 "loop_policy", "reporter_prompt")
 """Agent options that distinguish configurations in column labels (besides agent and model)."""
 
 
