@@ -98,6 +98,17 @@ def test_a_partial_verdict_replans_without_reset_under_careful(server: StubLLMSe
     assert first.wrong[0] in replan  # told which objects are wrong
 
 
+def test_a_plan_run_from_a_kept_scene_is_no_repeat_for_an_attempt_from_the_initial_scene(
+        server: StubLLMServer) -> None:
+    """Attempt 2 keeps the scene and raises before acting (so attempt 3 resets); attempt 3 answers
+    the same plan: from the initial scene its outcome is unknown, so it runs, not "identical"."""
+    result = run(server, "careful", THREE, "copied = [][0]", attempts=3)
+    first, second, third = result.llm.attempts
+    assert (first.rule, second.reset, second.rule) == ("partial_replan", False, "error")
+    assert third.reset is True and third.not_run is None and third.identical_to is None
+    assert third.extra_requests == 0 and third.error is not None  # it ran (and raised again)
+
+
 def test_the_same_verdict_resets_under_thesis(server: StubLLMServer) -> None:
     result = run(server, "thesis", THREE, REST)
     first, second = result.llm.attempts

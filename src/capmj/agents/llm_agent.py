@@ -180,6 +180,7 @@ class LLMAgent:
         feedback: Feedback | None = None  # of the last attempt whose plan ran
         feedbacks: list[Feedback] = []
         plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
+        starts: list[bool] = []  # whether each attempt started from the initial scene
         ends: dict[int, tuple[Checkpoint, BaseException | None]] = {}  # state and error after attempt k
         last_error: BaseException | None = None
         reset = True  # whether the next attempt starts from the initial scene (careful: not after a partial verdict)
@@ -192,9 +193,13 @@ class LLMAgent:
                     ctx.reset() if reset else ctx.next_attempt()
                 from_initial = k == 1 or reset
                 meter.attempt = k
+                # a plan counts as a repeat only of plans run from the same (initial) scene: only then
+                # is its outcome known (thesis: every attempt starts there, so every earlier plan counts)
+                comparable = [key if from_initial and start else None for key, start in zip(plans, starts)]
                 record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter,
-                                                               feedback, plans, feedbacks, reset=k > 1 and reset)
+                                                               feedback, comparable, feedbacks, reset=k > 1 and reset)
                 plans.append(outcome.key)
+                starts.append(from_initial)
                 if outcome.not_run is not None and outcome.identical_to in ends and from_initial:
                     # that plan, run again from the same initial state, would end where it ended
                     checkpoint, error = ends[outcome.identical_to]
