@@ -23,7 +23,7 @@ __all__ = ["RECORD_FIELDS", "confusion", "group_metrics", "metrics"]
 
 RECORD_FIELDS: dict[str, str] = {
     "task": "task name", "seed": "episode seed", "case": "case name within (task, seed)",
-    "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, near_inside, near_outside (or run)",
+    "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, toppled_out, near_inside, near_outside (or run)",
     "label": "ground truth: the task predicate's success on the state", "reporter": "the reporter's label",
     "reporter_prompt": "the text reporter's prompt: thesis or checked (--reporter-prompt)",
     "verdict": "the reporter's verdict: true, false or null (unknown)",
