@@ -214,9 +214,9 @@ class LLMAgent:
                     assessment=checked, wrong_share=wrong_share(checked, movable)),
                     on_unknown=self.on_unknown, reset=from_initial)
                 rule = decision.rule
+                unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
                 if meter.exceeded is not None or isinstance(error, LLMError):
                     rule = "llm_budget" if meter.exceeded is not None else "llm_error"
-                unknown = rule in ("unknown_replan", "unknown_stop")
                 record = replace(record, on_unknown=self.on_unknown if unknown else None, rule=rule,
                                  confidence=checked.confidence if checked is not None else None,
                                  low_confidence=checked.why if checked is not None else None)
