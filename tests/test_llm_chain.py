@@ -66,6 +66,7 @@ def lmp_of(request: dict[str, Any]) -> str:
     text = prompt_text(request)
     markers = {
         "You check from a list of object poses": "reporter_direct",
+        "You compare measured scene facts with a goal": "reporter_checked",
         "Write the plan for the goal in the last comment": "planner",
         "Set ret_val to the object names": "parse_obj_name",
         "Set ret_val to the position": "parse_position",

@@ -27,13 +27,15 @@ def lines(folder: str) -> list[dict]:
 
 
 ADDED = {"schema", "error_type", "error_status"}
+LOOP_KEYS = {"loop_policy", "reporter_prompt", "rule", "confidence", "low_confidence"}
+"""Keys added with issue #26's loop policies (capmj.records DEFAULT_IF_MISSING): written with their defaults."""
 
 
 def kept(old: object, new: object, where: str = "") -> list[str]:
     """Where ``new`` lost or changed a key of ``old`` or added one outside ADDED ([] when none)."""
     if isinstance(old, dict) and isinstance(new, dict):
         out = [f"{where}.{k} lost" for k in old if k not in new]
-        out += [f"{where}.{k} added" for k in new if k not in old and k not in ADDED]
+        out += [f"{where}.{k} added" for k in new if k not in old and k not in ADDED | LOOP_KEYS]
         return out + [x for k in old if k in new for x in kept(old[k], new[k], f"{where}.{k}")]
     if isinstance(old, list) and isinstance(new, list) and len(old) == len(new):
         return [x for i, (a, b) in enumerate(zip(old, new)) for x in kept(a, b, f"{where}[{i}]")]
@@ -159,3 +161,18 @@ def test_error_facts_follow_the_sandbox_wrapper_to_the_cause() -> None:
     assert describe(violation) == "PlanError: line 1: SandboxViolation: import statements are not allowed"
     assert repr(MotionFailed("m", status="s")) == "RuntimeError('m')" and isinstance(MotionFailed("m", status="s"),
                                                                                          RuntimeError)
+
+
+def test_v2_lines_written_before_loop_policies_read_strictly_as_the_thesis_loop() -> None:
+    line = load_record(lines("llm")[0]).to_dict()
+    for key in ("loop_policy", "reporter_prompt"):
+        del line["llm"][key]
+    for a in line["llm"]["attempts"]:
+        for key in ("rule", "confidence", "low_confidence"):
+            del a[key]
+    rec = EpisodeRecord.from_dict(line)  # strict: these keys alone may be missing
+    assert rec.llm is not None and (rec.llm.loop_policy, rec.llm.reporter_prompt) == ("thesis", "thesis")
+    assert all(a.rule is None for a in rec.llm_attempts)
+    del line["llm"]["attempts"][0]["verdict"]
+    with pytest.raises(RecordError, match="missing key 'verdict'"):
+        EpisodeRecord.from_dict(line)

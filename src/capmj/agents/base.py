@@ -90,6 +90,13 @@ class EpisodeContext:
         self.placements = {}
         self._attempt_steps0 = self.world.steps
 
+    def next_attempt(self) -> None:
+        """Start a new attempt from the state the last one left (a re-plan that keeps the scene,
+        the ``careful`` loop's partial re-plan): budgets count afresh, nothing is restored."""
+        self.attempt += 1
+        self.attempt_primitives = 0
+        self._attempt_steps0 = self.world.steps
+
     def checkpoint(self) -> Checkpoint:
         """The state at the end of an attempt, to return to with :meth:`restore`."""
         return Checkpoint(self.world.snapshot(), dict(self.placements))

@@ -1,6 +1,6 @@
 """The LLM agent: closed loop plan -> execute -> report -> (reset + re-plan) over LMPs.
 
-Per episode (``act``)::
+Per episode (``act``), under the default ``loop_policy="thesis"``::
 
     for attempt k = 1 .. attempts:
         if k > 1: ctx.reset()                      # back to the episode's initial state
@@ -13,6 +13,11 @@ Per episode (``act``)::
         predicate = the task's success predicate on the same state (recorded, never shown to the LLM)
         stop when the verdict is True, or there is no reporter and the plan finished,
              or the verdict is unknown and on_unknown == "stop"
+
+``loop_policy="careful"`` judges a plan that raised after acting, re-plans from the current state
+when the verdict names only some objects wrong, and stops on a low-confidence verdict; the rules
+and why are in :mod:`capmj.agents.loop_policy`, which decides after every attempt (the rule that
+fired is the attempt record's ``rule``).
 
 CapRavens re-ran the *old* plan before the new one after a failed verdict; capmj resets the scene
 and runs only the new plan.  Every attempt is recorded as an :class:`~capmj.records.AttemptRecord`
@@ -37,11 +42,13 @@ from typing import Any, Callable
 
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
+from capmj.agents.confidence import assess
 from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
+from capmj.agents.loop_policy import Outcome, check_policy, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
-from capmj.agents.reporter import REPORTERS, Report, make_reporter
+from capmj.agents.reporter import REPORTER_PROMPTS, REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
@@ -68,6 +75,10 @@ MAX_REPLAN_RETRIES = 10
 
 CACHE_ENV = "CAPMJ_LLM_CACHE"
 """Default cache folder for LLM completions when ``cache_dir`` is not given."""
+
+STOPPED = {"achieved": "reporter: achieved", "finished": "plan finished", "unknown_stop": "reporter: unknown",
+           "achieved_after_error": "reporter: achieved after an error", "low_confidence_stop": "reporter: low confidence"}
+"""``LLMNotes.stopped`` of the rules that stop the loop (besides LLM errors, budgets, attempts used up)."""
 
 DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
 """Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
@@ -102,8 +113,15 @@ class LLMAgent:
                  replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
                  replan_retries: int = DEFAULT_REPLAN_RETRIES,
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
-                 price: str | None = None, perception: str = "state") -> None:
+                 price: str | None = None, perception: str = "state", loop_policy: str = "thesis",
+                 reporter_prompt: str = "thesis") -> None:
         self.perception = perception  # the planner API's source: capmj.agents.perceived.PERCEPTION_MODES
+        self.loop_policy = check_policy(loop_policy)  # capmj.agents.loop_policy.LOOP_POLICIES
+        if reporter_prompt not in REPORTER_PROMPTS:
+            raise ConfigError(f"unknown reporter prompt {reporter_prompt!r}; valid: {', '.join(REPORTER_PROMPTS)}")
+        if reporter_prompt != "thesis" and reporter == "vlm":
+            raise ConfigError(f"reporter prompt {reporter_prompt!r} is a text-reporter prompt; it needs --reporter text")
+        self.reporter_prompt = reporter_prompt
         if on_unknown not in ON_UNKNOWN:
             raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
         replan_temperature = _at_least("replan_temperature", replan_temperature, float, "a number", 0)
@@ -158,31 +176,50 @@ class LLMAgent:
         ctx.notes["llm"] = self._notes(client, attempts)
         ctx.notes["llm_transcript"] = transcript
         goal = ctx.scene.goal
-        reporter = make_reporter(self.reporter, self.prompts_dir)
+        reporter = make_reporter(self.reporter, self.prompts_dir, self.reporter_prompt)
         feedback: Feedback | None = None  # of the last attempt whose plan ran
         feedbacks: list[Feedback] = []
         plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
+        starts: list[bool] = []  # whether each attempt started from the initial scene
         ends: dict[int, tuple[Checkpoint, BaseException | None]] = {}  # state and error after attempt k
         last_error: BaseException | None = None
+        reset = True  # whether the next attempt starts from the initial scene (careful: not after a partial verdict)
+        movable = ctx.world.movable_ids
         try:
             if reporter is not None:
                 reporter.start(ctx)
             for k in range(1, self.attempts + 1):
                 if k > 1:
-                    ctx.reset()
+                    ctx.reset() if reset else ctx.next_attempt()
+                from_initial = k == 1 or reset
                 meter.attempt = k
+                # a plan counts as a repeat only of plans run from the same (initial) scene: only then
+                # is its outcome known (thesis: every attempt starts there, so every earlier plan counts)
+                comparable = [key if from_initial and start else None for key, start in zip(plans, starts)]
                 record, error, report, outcome = self._attempt(ctx, client, transcript, k, goal, reporter,
-                                                               feedback, plans, feedbacks)
+                                                               feedback, comparable, feedbacks, reset=k > 1 and reset)
                 plans.append(outcome.key)
-                if outcome.not_run is not None and outcome.identical_to in ends:
+                starts.append(from_initial)
+                if outcome.not_run is not None and outcome.identical_to in ends and from_initial:
                     # that plan, run again from the same initial state, would end where it ended
                     checkpoint, error = ends[outcome.identical_to]
                     ctx.restore(checkpoint)
-                elif self.attempts > 1 and not isinstance(error, LLMError):
+                elif self.attempts > 1 and not isinstance(error, LLMError) and from_initial:
                     ends[k] = (ctx.checkpoint(), error)
                 last_error = error
-                unknown = error is None and report is not None and report.verdict is None
-                record = replace(record, on_unknown=self.on_unknown if unknown else None)
+                checked = assess(report, ctx.world.objects) if report is not None else None
+                decision = decide(self.loop_policy, Outcome(
+                    not_run=outcome.not_run is not None, error=error is not None,
+                    verdict=report.verdict if report is not None else None, judged=report is not None,
+                    assessment=checked, wrong_share=wrong_share(checked, movable)),
+                    on_unknown=self.on_unknown, reset=from_initial)
+                rule = decision.rule
+                unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
+                if meter.exceeded is not None or isinstance(error, LLMError):
+                    rule = "llm_budget" if meter.exceeded is not None else "llm_error"
+                record = replace(record, on_unknown=self.on_unknown if unknown else None, rule=rule,
+                                 confidence=checked.confidence if checked is not None else None,
+                                 low_confidence=checked.why if checked is not None else None)
                 attempts.append(record)
                 self._record_attempt(ctx, record)
                 if meter.exceeded is not None:
@@ -192,21 +229,23 @@ class LLMAgent:
                 if isinstance(error, LLMError):
                     stopped = "llm error"
                     break
-                failed = outcome.not_run is not None or error is not None or (
-                    report is not None and report.verdict is False) or (unknown and self.on_unknown == "replan")
-                if not failed:
-                    stopped = "reporter: achieved" if report is not None and report.verdict else (
-                        "reporter: unknown" if report is not None else "plan finished")
+                if decision.stop:
+                    stopped = STOPPED[rule]
+                    if rule == "achieved_after_error":
+                        last_error = None  # the loop ends on the reporter's "achieved"; the error is in the record
                     break
                 if k == self.attempts:
                     stopped = "attempts used up"
                     break
+                reset = decision.reset
                 if outcome.not_run is None:
                     feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
                                         error=record.error, error_line=record.error_line,
                                         report=report.text() if report is not None else "",
-                                        scene=self._scene_summary(ctx))
+                                        scene=self._scene_summary(ctx), from_initial=from_initial, reset=reset)
                     feedbacks.append(feedback)
+                elif feedback is not None and feedback.reset != reset:
+                    feedback = replace(feedback, reset=reset)  # the next plan starts where this attempt left it
         finally:
             if reporter is not None:
                 reporter.close()
@@ -216,8 +255,8 @@ class LLMAgent:
             raise last_error
 
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
-                 reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback]
-                 ) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
+                 reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback],
+                 *, reset: bool) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
         api = make_api(ctx, self.perception)
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
@@ -240,7 +279,9 @@ class LLMAgent:
         if not isinstance(error, LLMError) and outcome.not_run is None:
             try:
                 ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
-                if error is None and reporter is not None:
+                # careful: a plan that raised after acting is judged on the state it reached (rule a)
+                acted = error is not None and ctx.attempt_primitives > 0 and judges_errors(self.loop_policy)
+                if reporter is not None and (error is None or acted):
                     report = reporter.judge(session, ctx, goal)
             except Exception as exc:  # noqa: BLE001
                 llm_error = find_llm_error(exc)
@@ -258,10 +299,11 @@ class LLMAgent:
         if error is not None:
             told = self._error_report(error, ctx)
         if report is not None:
-            told = report.text() + "\n" + self._scene_summary(ctx)
+            told = (f"the plan failed with {describe(error)}\n" if error is not None else "") + report.text() + \
+                "\n" + self._scene_summary(ctx)
         new = client.records[before:]
         record = AttemptRecord(
-            attempt=k, reset=k > 1,
+            attempt=k, reset=reset,
             temperatures=tuple(temperature if t is None else t for t in outcome.temperatures),
             seeds=tuple(outcome.seeds), code=outcome.code,
             code_differs=outcome.identical_to is None if replanned else None,
@@ -332,7 +374,7 @@ class LLMAgent:
         """The episode's notes so far: options, the client's usage, the attempts, why it stopped."""
         u = client.usage()
         return LLMNotes(model=self.model, reporter=self.reporter, max_attempts=self.attempts,
-                        on_unknown=self.on_unknown, temperature=self.config.temperature,
+                        on_unknown=self.on_unknown, loop_policy=self.loop_policy, reporter_prompt=self.reporter_prompt, temperature=self.config.temperature,
                         replan_temperature=self.replan_temperature, replan_retries=self.replan_retries,
                         attempts=tuple(attempts), calls=u.calls, cached_calls=u.cached_calls,
                         failed_calls=u.failed_calls, prompt_tokens=u.prompt_tokens,

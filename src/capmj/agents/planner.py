@@ -90,6 +90,10 @@ class Feedback:
     """The reporter's verdict, reasons and wrong objects (empty when the plan failed)."""
     scene: str = ""
     """Object positions after the plan."""
+    from_initial: bool = True
+    """The plan ran from the episode's initial scene (False: from where an earlier plan left it)."""
+    reset: bool = True
+    """The next plan starts from the initial scene (False: the ``careful`` loop keeps the scene)."""
 
 
 @dataclass
@@ -152,7 +156,8 @@ def _failure(feedback: Feedback) -> list[str]:
 
 def feedback_text(feedback: Feedback) -> str:
     """The comment block of a re-plan request (without the question)."""
-    out = [f"# The plan above (attempt {feedback.attempt}) ran from the initial scene and did not achieve the goal."]
+    start = "the initial scene" if feedback.from_initial else "the scene the previous plan left"
+    out = [f"# The plan above (attempt {feedback.attempt}) ran from {start} and did not achieve the goal."]
     if feedback.code:
         lines = feedback.code.rstrip("\n").splitlines()
         width = len(str(len(lines)))
@@ -161,8 +166,13 @@ def feedback_text(feedback: Feedback) -> str:
     out += _failure(feedback)
     if feedback.scene:
         out += _comment(feedback.scene)
-    out.append("# The scene has been reset to its initial state. Write a corrected complete plan for the same goal: "
-               "fix what went wrong, do not repeat the plan above.")
+    if feedback.reset:
+        out.append("# The scene has been reset to its initial state. Write a corrected complete plan for the same goal: "
+                   "fix what went wrong, do not repeat the plan above.")
+    else:
+        out.append("# The scene has NOT been reset: every object is where the plan above left it (positions above). "
+                   "Write a plan that, from this scene, fixes only the objects whose state is wrong; leave the others "
+                   "where they are.")
     return "\n".join(out)
 
 

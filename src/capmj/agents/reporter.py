@@ -41,10 +41,12 @@ from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import CapmjError, ConfigError, PlanError, describe
 
-__all__ = ["REPORTERS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict", "make_reporter",
-           "parse_verdict", "parse_wrong"]
+__all__ = ["REPORTERS", "REPORTER_PROMPTS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict",
+           "make_reporter", "parse_verdict", "parse_wrong"]
 
 REPORTERS = ("none", "text", "vlm")
+REPORTER_PROMPTS = ("thesis", "checked")
+"""``--reporter-prompt``: :class:`TextReporter`, or :class:`~capmj.agents.reporter_checked.CheckedReporter`."""
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
 
@@ -381,9 +383,16 @@ class VLMReporter:
                 self._rig = None
 
 
-def make_reporter(mode: str, prompt_directory: Any = None) -> TextReporter | VLMReporter | None:
+def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis") -> Any:
+    """The reporter of ``mode`` (None for ``none``); ``prompt`` selects the text reporter's prompt."""
+    if prompt not in REPORTER_PROMPTS or (prompt != "thesis" and mode == "vlm"):
+        raise ConfigError(f"reporter prompt {prompt!r}: valid: {', '.join(REPORTER_PROMPTS)} (not thesis: text only)")
     if mode == "none":
         return None
+    if mode == "text" and prompt == "checked":
+        from capmj.agents.reporter_checked import CheckedReporter
+
+        return CheckedReporter(prompt_directory)
     if mode == "text":
         return TextReporter()
     if mode == "vlm":

@@ -66,6 +66,11 @@ AGENT_FLAGS: tuple[Flag, ...] = (
     Flag(("--attempts",), "attempts", "plan attempts (closed loop)", int, "N"),
     Flag(("--on-unknown",), "on_unknown", "what an unknown reporter verdict does (default: replan)",
          choices=("replan", "stop")),
+    Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: thesis (default: reset and re-plan "
+         "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
+         "on a low-confidence one; docs/llm.md)", choices=("thesis", "careful")),
+    Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code) or "
+         "checked (capmj binds the scene facts; docs/judge.md)", choices=("thesis", "checked")),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "
@@ -87,7 +92,7 @@ AGENT_OPTIONS: tuple[str, ...] = (tuple(o.field for o in LLM_OPTIONS) + tuple(f.
 ``LLMConfig`` field names); ``perception`` is also the reference agent's."""
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
-                 "perception")
+                 "perception", "loop_policy", "reporter_prompt")
 """Agent options that tell configurations apart in report column labels (besides agent and model)."""
 
 

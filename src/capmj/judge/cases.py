@@ -21,8 +21,9 @@ from capmj.tasks.protocol import Scene, Task, Verdict, make_scene
 
 __all__ = ["HARD_KINDS", "KINDS", "NEGATIVE_KINDS", "JudgeCase", "Stage", "layout_of", "set_digest"]
 
-NEGATIVE_KINDS: tuple[str, ...] = ("displaced", "unstacked", "toppled", "swapped", "wrong_bowl")
-"""Perturbations that break one success condition (see :mod:`capmj.judge.perturb`)."""
+NEGATIVE_KINDS: tuple[str, ...] = ("displaced", "unstacked", "toppled", "swapped", "wrong_bowl", "toppled_out")
+"""Perturbations that break one success condition (see :mod:`capmj.judge.perturb`); ``toppled_out``,
+made only where a tower has no room to lie where it stood, breaks two (the stack and the placement)."""
 HARD_KINDS: tuple[str, ...] = ("near_inside", "near_outside")
 """One object moved to just inside (label True) or just outside (label False) its tolerance."""
 KINDS: tuple[str, ...] = ("oracle", *NEGATIVE_KINDS, *HARD_KINDS)

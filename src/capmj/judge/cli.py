@@ -30,6 +30,7 @@ EXIT_BUDGET = 3
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from capmj.agents.reporter import REPORTER_PROMPTS
     from capmj.judge.cases import KINDS
     from capmj.judge.evaluate import JUDGE_REPORTERS
 
@@ -52,6 +53,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"case kinds to build (default: all: {', '.join(KINDS)})")
     p.add_argument("--reporter", default="text", choices=JUDGE_REPORTERS,
                    help="text / vlm: the closed loop's reporters; predicate: the task predicate (a reference)")
+    p.add_argument("--reporter-prompt", dest="reporter_prompt", default="thesis", choices=REPORTER_PROMPTS,
+                   help="the text reporter's prompt: thesis (checking code the model writes) or checked (capmj "
+                        "binds the scene facts, the model compares them with the goal); default thesis")
+    p.add_argument("--per-task", dest="per_task", type=int, default=None, metavar="N",
+                   help="judge a deterministic stratified subset: N cases per task, drawn in turn from oracle, "
+                        "negatives, near_inside, near_outside (capmj.judge.subset); default: every case")
     g = p.add_argument_group("LLM options (as for the bench; see docs/llm.md)")
     add_llm_options(g)
     g.add_argument("--cache-only", dest="cache_only", action="store_true",
@@ -139,7 +146,9 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
                          **{k: llm[k] for k in ("timeout_s", "max_tokens") if llm[k] is not None},
                          cache_dir=llm["cache_dir"], cache_only=bool(args.cache_only),
                          case_max_tokens=args.case_max_tokens, case_max_cost_usd=args.case_max_cost_usd,
-                         price=args.price)
+                         price=args.price, reporter_prompt=args.reporter_prompt)
+    if args.per_task is not None and args.per_task < 1:
+        raise ConfigError(f"--per-task must be >= 1, got {args.per_task}")
     out: Path = args.out
     judge = Judge(config, log_dir=out / "rrd" if args.log else None)
     out.mkdir(parents=True, exist_ok=True)
@@ -148,6 +157,10 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
     cases = list(the_set.cases)
+    if args.per_task is not None:
+        from capmj.judge.subset import stratified
+
+        cases = stratified(cases, args.per_task)
     skipped = [s.__dict__ for s in the_set.skipped]
     if args.from_run is not None:
         from capmj.judge.fromrun import RUN_KIND, run_cases
@@ -160,14 +173,16 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     records, transcripts, stopped = _judge_all(judge, cases, args)
     _write_jsonl(out / "judged.jsonl", records)
     _write_jsonl(out / "transcripts.jsonl", transcripts)
-    summary: dict[str, Any] = {"reporter": config.label, "set_digest": set_digest(cases), "pairs": len(tasks) * len(seeds),
+    summary: dict[str, Any] = {"reporter": config.label, "reporter_prompt": config.reporter_prompt,
+               "per_task": args.per_task, "set_digest": set_digest(cases), "pairs": len(tasks) * len(seeds),
                "cases": len(cases), "judged": len(records), "skipped": len(skipped), "stopped": stopped,
                "overall": metrics(records), "tasks": group_metrics(records, lambda r: str(r["task"])),
                "kinds": group_metrics(records, lambda r: str(r["kind"]))}
     _write_text(out / "summary.json", json.dumps(summary, indent=2, sort_keys=True) + "\n")
     _write_text(out / "summary.md", markdown(summary))
     _write_text(out / "config.json", json.dumps({"argv": list(argv), "tasks": tasks, "seeds": seeds,
-                                                       "kinds": kinds, "config": config.__dict__},
+                                                       "kinds": kinds, "per_task": args.per_task,
+                                                       "config": config.__dict__},
                                                       indent=2, sort_keys=True) + "\n")
     o = summary["overall"]
     print(f"judged {len(records)}/{len(cases)} states: balanced accuracy {_pct(o['balanced_accuracy'])}, "

@@ -23,7 +23,8 @@ from capmj.agents.base import EpisodeContext
 from capmj.agents.llm_agent import DEFAULT_LMP_BUDGET
 from capmj.agents.llm_meter import LLMMeter, parse_price
 from capmj.agents.lmp import LMPSession, find_llm_error
-from capmj.agents.reporter import make_reporter
+from capmj.agents.confidence import assess
+from capmj.agents.reporter import REPORTER_PROMPTS, make_reporter
 from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.llm import LLMClient, LLMConfig
@@ -54,18 +55,30 @@ class JudgeConfig:
     case_max_cost_usd: float | None = None
     price: str | None = None
     prompts_dir: str | None = None
+    reporter_prompt: str = "thesis"
+    """The text reporter's prompt (:data:`capmj.agents.reporter.REPORTER_PROMPTS`), as the bench's
+    ``--reporter-prompt``."""
 
     def __post_init__(self) -> None:
         if self.reporter not in JUDGE_REPORTERS:
             raise ConfigError(f"unknown reporter {self.reporter!r}; valid reporters: {', '.join(JUDGE_REPORTERS)}")
+        if self.reporter_prompt not in REPORTER_PROMPTS:
+            raise ConfigError(f"unknown reporter prompt {self.reporter_prompt!r}; valid prompts: "
+                              f"{', '.join(REPORTER_PROMPTS)}")
+        if self.reporter_prompt != "thesis" and self.reporter != "text":
+            raise ConfigError(f"--reporter-prompt {self.reporter_prompt} needs --reporter text")
         if self.reporter != "predicate" and not self.model:
             raise ConfigError(f"--reporter {self.reporter} needs --model (any litellm model string, e.g. "
                               "gpt-4o-mini or openai/<local alias> with --api-base)")
 
     @property
     def label(self) -> str:
-        """``text openai/qwen2.5-coder-1.5b``, ``predicate``: the name of this reporter in reports."""
-        return self.reporter if self.reporter == "predicate" else f"{self.reporter} {self.model}"
+        """``text openai/qwen2.5-coder-1.5b``, ``text/checked openai/...``, ``predicate``: the name of
+        this reporter in reports (the thesis prompt adds nothing, as before prompts were selectable)."""
+        if self.reporter == "predicate":
+            return self.reporter
+        prompt = "" if self.reporter_prompt == "thesis" else f"/{self.reporter_prompt}"
+        return f"{self.reporter}{prompt} {self.model}"
 
 
 class Judge:
@@ -101,12 +114,12 @@ class Judge:
         stage.restart()
         rec = self._recorder(case, stage)
         ctx = EpisodeContext(stage.task, case.seed, stage.scene, stage.world, recorder=rec)
-        reporter = make_reporter(self.config.reporter, self.config.prompts_dir) \
+        reporter = make_reporter(self.config.reporter, self.config.prompts_dir, self.config.reporter_prompt) \
             if self.config.reporter != "predicate" else None
         out: dict[str, Any] = {
             "task": case.task, "seed": case.seed, "case": case.case, "kind": case.kind, "label": case.label,
-            "reporter": self.config.label, "verdict": None, "source": "unknown", "reason": "", "wrong": [],
-            "errors": [], "predicate": None, "correct": False, "calls": 0, "cached_calls": 0,
+            "reporter": self.config.label, "reporter_prompt": self.config.reporter_prompt, "verdict": None, "source": "unknown", "reason": "", "wrong": [],
+            "errors": [], "confidence": None, "low_confidence": None, "predicate": None, "correct": False, "calls": 0, "cached_calls": 0,
             "prompt_tokens": 0, "completion_tokens": 0, "cost_usd": 0.0, "wall_s": 0.0, "error": None}
         transcript: list[Any] = []
         try:
@@ -160,8 +173,9 @@ class Judge:
             llm = find_llm_error(exc)
             rec["error"] = f"{type(llm or exc).__name__}: {llm or exc}"
         else:
+            checked = assess(report, ctx.world.objects)
             rec.update(verdict=report.verdict, source=report.source, reason=report.reason, wrong=list(report.wrong),
-                       errors=list(report.errors))
+                       errors=list(report.errors), confidence=checked.confidence, low_confidence=checked.why)
         new = client.records[before:]
         rec.update(calls=len(new), cached_calls=sum(r.cached for r in new),
                    prompt_tokens=meter.prompt_tokens, completion_tokens=meter.completion_tokens,

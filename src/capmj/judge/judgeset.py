@@ -34,7 +34,7 @@ from capmj.judge.perturb import Proposal
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks.protocol import Task
 
-__all__ = ["MAX_PROPOSALS", "NEAR_MARGIN", "PLACE_TOL", "STILL_TOL", "JudgeSet", "Skip", "build_cases",
+__all__ = ["MAX_HARD_PROPOSALS", "MAX_PROPOSALS", "NEAR_MARGIN", "PLACE_TOL", "STILL_TOL", "JudgeSet", "Skip", "build_cases",
            "build_set", "kind_rng"]
 
 STILL_TOL = 0.005
@@ -45,6 +45,9 @@ NEAR_MARGIN = 0.004
 """``near_outside`` puts the object this far (m) beyond the shift at which the predicate flips."""
 MAX_PROPOSALS = 12
 """Proposals tried per kind before the kind is skipped for that (task, seed)."""
+MAX_HARD_PROPOSALS = 24
+"""The same for the hard kinds, whose fall-backs (a bowl's outside, a whole tower) come after up to
+three proposals per goal object (:func:`capmj.judge.perturb.near_tolerance`)."""
 
 
 @dataclass(frozen=True)
@@ -69,13 +72,17 @@ def kind_rng(task: str, seed: int, kind: str) -> np.random.Generator:
                                                          zlib.crc32(kind.encode())]))
 
 
+_GENERATOR = {"near_inside": "near_tolerance", "near_outside": "near_tolerance"}
+"""The perturbation function of a kind whose name differs from it."""
+
+
 def _proposals(kind: str, base: SceneState, goal_ids: Sequence[int], movable: Sequence[int],
                rng: np.random.Generator, success: Callable[[SceneState], bool]) -> Iterator[Proposal]:
     if kind in HARD_KINDS:
         return perturb.near_tolerance(base, goal_ids, movable, rng, success, inside=kind == "near_inside",
                                       margin=NEAR_MARGIN)
     fn = {"displaced": perturb.displaced, "unstacked": perturb.unstacked, "toppled": perturb.toppled,
-          "swapped": perturb.swapped, "wrong_bowl": perturb.wrong_bowl}[kind]
+          "swapped": perturb.swapped, "wrong_bowl": perturb.wrong_bowl, "toppled_out": perturb.toppled_out}[kind]
     return fn(base, goal_ids, movable, rng)
 
 
@@ -124,7 +131,7 @@ def build_cases(task: Task, seed: int, kinds: Iterable[str] = KINDS) -> tuple[li
             raise ValueError(f"unknown case kind {kind!r}; valid kinds: {', '.join(KINDS)}")
         reasons: list[str] = []
         gen = _proposals(kind, base, goal_ids, movable, kind_rng(name, seed, kind), success)
-        for prop in _take(gen, MAX_PROPOSALS):
+        for prop in _take(gen, MAX_HARD_PROPOSALS if kind in HARD_KINDS else MAX_PROPOSALS):
             prop = replace(prop, layout=_stored(prop.layout))
             state = stage.realise(prop.layout)
             v = stage.evaluate(state)
@@ -136,7 +143,8 @@ def build_cases(task: Task, seed: int, kinds: Iterable[str] = KINDS) -> tuple[li
                 break
             reasons.append(problem)
         else:
-            why = "nothing to perturb" if not reasons else f"{len(reasons)} proposal(s) rejected: {reasons[0]}"
+            why = (f"no proposal: nothing to perturb or no room (capmj.judge.perturb.{_GENERATOR.get(kind, kind)})"
+                   if not reasons else f"{len(reasons)} proposal(s) rejected: {reasons[0]}")
             skipped.append(Skip(name, seed, kind, why))
     return cases, skipped
 

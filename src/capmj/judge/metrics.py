@@ -7,7 +7,9 @@ failed states it calls failed (a miss stops the loop too early), precision the s
 counts against accuracy, recall and specificity, and ``verdict_rate`` says how often it happened.
 Balanced accuracy, the mean of recall and specificity, is the headline figure because the set
 has more negatives than positives: an always-"no" reporter scores its negative share in accuracy
-but 0.5 here.  Every proportion comes with its 95 % Wilson interval.
+but 0.5 here.  Every proportion comes with its 95 % Wilson interval.  ``high_confidence`` counts the
+verdicts :func:`capmj.agents.confidence.assess` trusts (the ones the ``careful`` loop acts on) and
+``high_confidence_accuracy`` is their share of right answers.
 """
 
 from __future__ import annotations
@@ -21,12 +23,15 @@ __all__ = ["RECORD_FIELDS", "confusion", "group_metrics", "metrics"]
 
 RECORD_FIELDS: dict[str, str] = {
     "task": "task name", "seed": "episode seed", "case": "case name within (task, seed)",
-    "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, near_inside, near_outside (or run)",
+    "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, toppled_out, near_inside, near_outside (or run)",
     "label": "ground truth: the task predicate's success on the state", "reporter": "the reporter's label",
+    "reporter_prompt": "the text reporter's prompt: thesis or checked (--reporter-prompt)",
     "verdict": "the reporter's verdict: true, false or null (unknown)",
     "source": "where the verdict came from: code, repair, direct, unknown (or predicate)",
     "reason": "the reporter's reason", "wrong": "objects it names as wrong",
     "errors": "problems met on the way to the verdict",
+    "confidence": "high / low (capmj.agents.confidence.assess; null without an LLM answer)",
+    "low_confidence": "why it is low (a key of capmj.agents.confidence.LOW_CONFIDENCE), else null",
     "predicate": "the predicate re-evaluated on the state as judged (must equal label)",
     "correct": "verdict == label", "calls": "LLM calls", "cached_calls": "of which from the cache",
     "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
@@ -72,6 +77,7 @@ def metrics(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         src = str(r.get("source") or "unknown")
         sources[src] = sources.get(src, 0) + 1
     cost = [r.get("cost_usd") for r in records]
+    high = [r for r in records if r.get("confidence") == "high"]
     return {
         "n": n, "positives": pos, "negatives": neg, **c,
         "accuracy": _rate(c["tp"] + c["tn"], n), "accuracy_ci": _ci(c["tp"] + c["tn"], n),
@@ -82,6 +88,8 @@ def metrics(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         "positive_share": _rate(pos, n),
         "verdict_rate": _rate(reached, n), "verdict_rate_ci": _ci(reached, n),
         "verdict_sources": {k: v for k, v in sources.items() if v or k in SOURCES},
+        "high_confidence": len(high),
+        "high_confidence_accuracy": _rate(sum(1 for r in high if r.get("correct")), len(high)),
         "label_mismatches": sum(1 for r in records if r.get("predicate") is not None and r["predicate"] != r["label"]),
         "errors": sum(1 for r in records if r.get("error")),
         "calls": sum(int(r.get("calls") or 0) for r in records),

@@ -21,7 +21,7 @@ from typing import Mapping, Sequence
 _ATTEMPT = re.compile(r"^llm/attempt(\d+)/(.+)$")
 _LINE = re.compile(r"\bline (\d+)\b")
 _PART_ORDER = ("prompt", "completion", "code", "removed_imports", "printed", "identical_to", "result", "error")
-REPORTER_LMPS = ("parse_completion", "vlm_reporter", "reporter_direct")
+REPORTER_LMPS = ("parse_completion", "vlm_reporter", "reporter_direct", "reporter_checked")
 """LMPs whose results are the reporter's verdict and reasoning (shown under "Verdict")."""
 
 

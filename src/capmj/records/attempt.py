@@ -13,7 +13,27 @@ from typing import Any, ClassVar
 
 from capmj.records.codec import from_plain, to_plain
 
-__all__ = ["ATTEMPT_FIELDS", "ApiError", "AttemptRecord"]
+__all__ = ["ATTEMPT_FIELDS", "LOOP_RULES", "ApiError", "AttemptRecord"]
+
+LOOP_RULES: dict[str, str] = {
+    "achieved": "the reporter said achieved: stop",
+    "finished": "no reporter and the plan finished: stop",
+    "not_achieved": "the reporter said not achieved: reset the scene and re-plan",
+    "unknown_replan": "unknown verdict, --on-unknown replan: reset and re-plan",
+    "unknown_stop": "unknown verdict, --on-unknown stop: stop",
+    "error": "the plan raised (judged not achieved, or not judged): reset and re-plan with the error",
+    "not_run": "the plan was identical to an earlier one and not run: re-plan",
+    "achieved_after_error": "careful: the plan raised after acting, the reporter judged the reached state "
+                            "achieved: stop there (error recorded, state kept)",
+    "partial_replan": "careful: not achieved, the reporter named some (not all) movable objects wrong: "
+                      "re-plan from the current state, no reset",
+    "low_confidence_stop": "careful: the verdict is low-confidence (capmj.agents.confidence): stop, keep the state",
+    "llm_error": "the LLM provider failed: stop",
+    "llm_budget": "the episode's LLM budget is used up: stop",
+}
+"""What the loop decided after an attempt (``rule`` of an attempt record), by
+:func:`capmj.agents.loop_policy.decide`.  The loop also stops when the attempts are used up
+(``LLMNotes.stopped``), whatever the rule."""
 
 ATTEMPT_FIELDS: dict[str, str] = {
     "attempt": "1, 2, ...",
@@ -44,6 +64,9 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "predicate": "the task's success predicate on the state the reporter judged (None if it failed)",
     "predicate_progress": "the predicate's progress in [0, 1] on that state",
     "on_unknown": "the policy applied to an unknown verdict ('replan'/'stop'), else None",
+    "confidence": "the verdict's confidence, 'high' or 'low' (capmj.agents.confidence.assess); None without a reporter",
+    "low_confidence": "why it is low (a key of capmj.agents.confidence.LOW_CONFIDENCE), else None",
+    "rule": "which loop rule fired after this attempt (a key of LOOP_RULES)",
     "report": "what the next attempt is told (verdict/error and object positions)",
     "primitives": "pick-and-place calls", "api_calls": "planner API calls",
     "llm_calls": "LLM calls", "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
@@ -96,6 +119,9 @@ class AttemptRecord:
     predicate: bool | None = None
     predicate_progress: float | None = None
     on_unknown: str | None = None
+    confidence: str | None = None
+    low_confidence: str | None = None
+    rule: str | None = None
     report: str = ""
     primitives: int = 0
     api_calls: int = 0
@@ -108,6 +134,9 @@ class AttemptRecord:
                                                          "failed_program", "api_error", "reporter_error"})
     """Keys present only with an error (or, ``reporter_error``, a reporter's own error), as written
     before records were typed."""
+    DEFAULT_IF_MISSING: ClassVar[frozenset[str]] = frozenset({"confidence", "low_confidence", "rule"})
+    """Keys added after ``capmj.episode/2`` was first written (issue #26's loop policies): a line
+    without them reads as their defaults."""
 
     def to_dict(self) -> dict[str, Any]:
         return to_plain(self)

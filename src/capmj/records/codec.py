@@ -11,6 +11,9 @@ Conventions a record type opts into with class attributes:
 * ``OMIT_IF_NONE``: keys left out of the dict while their value is None (keys that files written
   today hold only sometimes, e.g. an attempt's ``api_error``); missing on reading means None.
 * ``EMPTY_IF_NONE``: record-valued keys written as ``{}`` while None (``llm`` of a non-LLM episode).
+* ``DEFAULT_IF_MISSING``: keys added to a record after lines of its schema were written (always
+  written now); missing on reading means the field's default.  Why not a new schema: the older
+  lines mean exactly the default (e.g. no ``loop_policy``: the only loop there was, ``thesis``).
 
 A ``float`` may be None: :func:`capmj.bench.results.sanitize` writes non-finite floats as null.
 ``strict=False`` (legacy migration only) ignores unknown keys and fills missing ones from defaults.
@@ -71,6 +74,7 @@ def from_plain(cls: type[R], data: Any, *, strict: bool = True, skip: frozenset[
         raise RecordError(f"{name}: unknown key(s) {', '.join(map(repr, unknown))}")
     omit: frozenset[str] = getattr(cls, "OMIT_IF_NONE", frozenset())
     empty: frozenset[str] = getattr(cls, "EMPTY_IF_NONE", frozenset())
+    later: frozenset[str] = getattr(cls, "DEFAULT_IF_MISSING", frozenset())
     hints = _hints(typing.cast(type, cls))
     kwargs: dict[str, Any] = {}
     for key, f in fields.items():
@@ -81,6 +85,8 @@ def from_plain(cls: type[R], data: Any, *, strict: bool = True, skip: frozenset[
             kwargs[key] = _convert(value, hints[key], f"{name}.{key}", strict)
         elif key in omit:
             kwargs[key] = None
+        elif key in later:
+            continue  # the field's default
         elif strict or (f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING):
             raise RecordError(f"{name}: missing key {key!r}")
     return cls(**kwargs)

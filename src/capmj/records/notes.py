@@ -63,6 +63,8 @@ class LLMNotes:
     reporter: str = "none"
     max_attempts: int = 1
     on_unknown: str = "replan"
+    loop_policy: str = "thesis"
+    reporter_prompt: str = "thesis"
     temperature: float = 0.0
     replan_temperature: float = 0.0
     replan_retries: int = 0
@@ -80,6 +82,8 @@ class LLMNotes:
     OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"stopped", "spend"})
     """Keys absent until the loop stops / the episode's spend is summed up (an agent that raised
     before that)."""
+    DEFAULT_IF_MISSING: ClassVar[frozenset[str]] = frozenset({"loop_policy", "reporter_prompt"})
+    """Added with issue #26's loop policies and reporter prompts; older lines ran the thesis's."""
 
     def to_dict(self) -> dict[str, Any]:
         return to_plain(self)

@@ -1,0 +1,68 @@
+"""Whether a reporter's verdict can be acted on: the structured verdict behind the ``careful`` loop.
+
+A verdict is *high-confidence* when it is consistent in itself and with the scene:
+
+* ``True`` naming no wrong object, or
+* ``False`` naming at least one real object the robot can move (resolved by
+  :func:`capmj.agents.scene_facts.resolve_name`).
+
+Otherwise it is *low-confidence*, for one of the reasons of :data:`LOW_CONFIDENCE`.  Why these
+rules: a "not achieved" that cannot say which object is wrong gives a re-plan nothing to fix, and a
+small model's unfounded "no" was exactly what undid reached goals (issue #26: with the shared 1.5B
+model, H and J reached the goal, the reporter said no, the re-plan undid it).  Naming only fixed
+objects (zones, bowls: the robot cannot move them, so they are where they started) contradicts the
+facts, and so does an "achieved" that lists wrong objects.  The ``careful`` loop
+(:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
+verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from capmj.agents.reporter import Report
+from capmj.agents.scene_facts import resolve_name
+from capmj.sim.objects import ObjectSpec
+
+__all__ = ["CONFIDENCE_LEVELS", "LOW_CONFIDENCE", "Assessment", "assess"]
+
+CONFIDENCE_LEVELS = ("high", "low")
+LOW_CONFIDENCE: dict[str, str] = {
+    "no_verdict": "the reporter reached no verdict (unparseable or unknown)",
+    "names_nothing": "not achieved, but no wrong object named",
+    "names_no_real_object": "not achieved, but none of the names is an object of the scene",
+    "names_only_fixed": "not achieved, but it names only objects the robot cannot move (they are where they started)",
+    "achieved_but_names_wrong": "achieved, yet it names objects as wrong",
+}
+"""Why a verdict is low-confidence (the key is recorded)."""
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """A verdict checked against the scene: its confidence and the real movable objects it names."""
+
+    confidence: str
+    """``"high"`` or ``"low"``."""
+    why: str | None = None
+    """A key of :data:`LOW_CONFIDENCE` when low, else None."""
+    wrong_ids: tuple[int, ...] = ()
+    """obj_ids of the movable objects the verdict names as wrong, in its order."""
+
+
+def assess(report: Report | None, objects: Sequence[ObjectSpec]) -> Assessment:
+    """The :class:`Assessment` of ``report`` (None: no reporter ran, low with ``no_verdict``)."""
+    if report is None or report.verdict is None:
+        return Assessment("low", "no_verdict")
+    named = [resolve_name(n, objects) for n in report.wrong]
+    real = [o for o in named if o is not None]
+    movable = tuple(dict.fromkeys(o.obj_id for o in real if not o.fixed))
+    if report.verdict:
+        return Assessment("low", "achieved_but_names_wrong", movable) if movable else Assessment("high")
+    if not report.wrong:
+        return Assessment("low", "names_nothing")
+    if not real:
+        return Assessment("low", "names_no_real_object")
+    if not movable:
+        return Assessment("low", "names_only_fixed")
+    return Assessment("high", None, movable)
