@@ -20,12 +20,7 @@ from capmj.sim.world import World
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "src" / "capmj"
 
-EXCEPTIONS = {
-    "agents/footprints.py":
-        "reads each object's geoms in world frame (geom_xpos/xmat/aabb) for the planner's footprints; "
-        "issue 28 step 3 replaces it with the one footprint model on another branch, which should read "
-        "World.body_parts and World.body_poses instead",
-}
+EXCEPTIONS: dict[str, str] = {}
 """Modules above ``sim/`` allowed through, each with the reason (path relative to ``src/capmj``)."""
 
 COMMON_WORDS = {"act", "bind", "body", "camera", "key", "model", "names", "signature", "stat", "time", "warning",

@@ -31,6 +31,7 @@ from __future__ import annotations
 import ast
 import math
 from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -41,7 +42,8 @@ from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import CapmjError, ConfigError, PlanError, describe
 
-__all__ = ["REPORTERS", "REPORTER_PROMPTS", "SOURCES", "Report", "TextReporter", "VLMReporter", "direct_verdict",
+
+__all__ = ["REPORTERS", "REPORTER_PROMPTS", "SOURCES", "Report", "TextReporter", "VLMReporter", "ask_verdict", "direct_verdict",
            "make_reporter", "parse_verdict", "parse_wrong"]
 
 REPORTERS = ("none", "text", "vlm")
@@ -357,23 +359,12 @@ class VLMReporter:
         ]
         messages: list[dict[str, Any]] = [{"role": "system", "content": load_system_prompt(folder)},
                                           {"role": "user", "content": content}]
-        errors: tuple[str, ...] = ()
-        for source in ("code", "repair"):
-            if source == "repair":
-                call = session.next_call("vlm_reporter", goal)
-            text = session.ask(call, messages)  # LLMError propagates: it ends the episode's attempts
-            judge, reason, problem = parse_verdict(text)
-            if problem is None:
-                wrong = parse_wrong(text)
-                session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-                return Report(self.mode, judge, reason, errors[-1] if errors else None, source, wrong, errors)
-            session.record(call, "error", problem)
-            errors += (f"{source}: {problem}",)
-            messages = messages + [
-                {"role": "assistant", "content": text},
-                {"role": "user", "content": f"Your answer gave no verdict: {problem}. Answer only with one ```python "
-                                            "block that sets judge = True or False and reason = a short explanation."}]
-        return direct_verdict(session, goal, self.mode, errors)
+        first = call
+        report, errors = ask_verdict(
+            session, self.mode, lambda source: first if source == "code" else session.next_call("vlm_reporter", goal),
+            messages, "Answer only with one ```python block that sets judge = True or False and reason = a short "
+            "explanation.")
+        return report if report is not None else direct_verdict(session, goal, self.mode, errors)
 
     def close(self) -> None:
         if self._rig is not None:
@@ -398,3 +389,25 @@ def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis
     if mode == "vlm":
         return VLMReporter(prompt_directory)
     raise ConfigError(f"unknown reporter {mode!r}; valid reporters: {', '.join(REPORTERS)}")
+
+
+def ask_verdict(session: LMPSession, mode: str, call_for: Callable[[str], LMPCall], messages: list[dict[str, Any]],
+                repair_hint: str) -> tuple[Report | None, tuple[str, ...]]:
+    """Ask for a verdict answer (``judge``, ``reason``, ``wrong``), with one repair round when it
+    gives none: ``(report, errors)``, ``report`` None when both rounds failed.  Shared by the
+    answer-only reporters (VLM, checked); ``call_for(source)`` names the call of each round.
+    LLMError propagates: it ends the episode's attempts."""
+    errors: tuple[str, ...] = ()
+    for source in ("code", "repair"):
+        call = call_for(source)
+        text = session.ask(call, messages)
+        judge, reason, problem = parse_verdict(text)
+        if problem is None:
+            wrong = parse_wrong(text)
+            session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+            return Report(mode, judge, reason, errors[-1] if errors else None, source, wrong, errors), errors
+        session.record(call, "error", problem)
+        errors += (f"{source}: {problem}",)
+        messages = messages + [{"role": "assistant", "content": text},
+                               {"role": "user", "content": f"Your answer gave no verdict: {problem}. {repair_hint}"}]
+    return None, errors

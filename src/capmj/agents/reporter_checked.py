@@ -23,7 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 from capmj.agents.lmp import LMPSession, prompts_dir
-from capmj.agents.reporter import Report, parse_verdict, parse_wrong
+from capmj.agents.reporter import Report, ask_verdict
 from capmj.agents.scene_facts import facts_text, scene_facts, state_from_api
 from capmj.errors import ConfigError
 
@@ -57,22 +57,12 @@ class CheckedReporter:
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
         messages = session.messages(self.question(session, ctx, goal))
-        errors: tuple[str, ...] = ()
-        for source in ("code", "repair"):
-            call = session.next_call("reporter_checked", goal)
-            text = session.ask(call, messages)  # LLMError propagates: it ends the episode's attempts
-            judge, reason, problem = parse_verdict(text)
-            if problem is None:
-                wrong = parse_wrong(text)
-                session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-                return Report(self.mode, judge, reason, errors[-1] if errors else None, source, wrong, errors)
-            session.record(call, "error", problem)
-            errors += (f"{source}: {problem}",)
-            messages = messages + [
-                {"role": "assistant", "content": text},
-                {"role": "user", "content": f"Your answer gave no verdict: {problem}. Answer only with one ```python "
-                                            "block that sets judge = True or False, reason = a short explanation and "
-                                            "wrong = [full names of the objects whose facts break the goal]."}]
+        report, errors = ask_verdict(
+            session, self.mode, lambda source: session.next_call("reporter_checked", goal), messages,
+            "Answer only with one ```python block that sets judge = True or False, reason = a short explanation and "
+            "wrong = [full names of the objects whose facts break the goal].")
+        if report is not None:
+            return report
         return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
 
     def close(self) -> None:
