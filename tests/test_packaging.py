@@ -156,8 +156,13 @@ def test_wheel_generates_a_task_with_its_packaged_prompts(installed, tmp_path):
     assert f"{GOOD}" in run.stdout and "1 of 1 accepted" in run.stdout, run.stdout
     line = json.loads((out / "generation.jsonl").read_text())
     assert line["stage"] == "accepted" and line["usage"]["calls"] == len(bodies) > 0, line
-    system = (ROOT / "prompts" / "generator" / "system.txt").read_text().strip()
-    assert all(b["messages"][0] == {"role": "system", "content": system} for b in bodies)
+    # one system message for every request (a prefix cache reads it once): the wheel's system.txt
+    # with the task API (task_api.txt) and the library filled in
+    role = (ROOT / "prompts" / "generator" / "system.txt").read_text().split("$task_api")[0].strip()
+    systems = {json.dumps(b["messages"][0]) for b in bodies}
+    assert len(systems) == 1 and bodies[0]["messages"][0]["role"] == "system"
+    content = bodies[0]["messages"][0]["content"]
+    assert content.startswith(role) and "THE TASK API." in content and "$" not in content.split("EXISTING TASKS")[1]
     assert f'"{GOOD}" = "capmj_generated_wheel.' in (out / "pyproject.toml").read_text()
 
 
