@@ -12,6 +12,7 @@ import hashlib
 import json
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -235,3 +236,12 @@ def test_runaway_allocation_stopped_by_the_memory_limit(tmp_path):
                        limits=Limits(cpu_s=60, memory_mb=2048, wall_s=120))
     scenes = {r.name: r for r in run.results}["scenes"]
     assert scenes.outcome == "error" and "MemoryError" in scenes.detail, run
+
+
+def test_the_task_api_text_is_the_same_in_every_process() -> None:
+    """The API reference is the generator's system message: two processes with different hash
+    seeds must render it byte for byte alike (sets sorted), or the LLM cache misses on every rerun."""
+    code = "import hashlib; from capmj.generate.library import api_reference as a; print(hashlib.sha256(a().encode()).hexdigest())"
+    out = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                          env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2", "3")}
+    assert len(out) == 1, out

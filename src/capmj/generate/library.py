@@ -69,13 +69,23 @@ it (``SPAWN_BOUNDS``, ``DEFAULT_COLORS``) or as ``...``: the reference is read b
 ~20-50 tokens/s, and a repeated 80-character tuple teaches nothing."""
 
 
+def _literal(v: object) -> str:
+    """``repr`` with floats to 4 significant digits and sets in sorted order: a set's repr follows
+    the hash seed, and the prompt must be the same text in every process (its LLM cache key and a
+    server's prefix cache depend on it)."""
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, (set, frozenset)):
+        items = ", ".join(sorted(repr(x) for x in v))
+        return f"{type(v).__name__}({{{items}}})" if v else f"{type(v).__name__}()"
+    return repr(v)
+
+
 def _value(v: object, module: ModuleType) -> str:
     """A short text for a default or a constant: floats to 4 significant digits, long values by
     the name of an equal public constant of ``module``."""
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    text = repr(v)
-    if len(text) <= LONG_DEFAULT:
+    text = _literal(v)
+    if isinstance(v, float) or len(text) <= LONG_DEFAULT:
         return text
     for name, const in vars(module).items():
         if name.isupper() and type(const) is type(v):
@@ -123,7 +133,7 @@ def _members(module: ModuleType, names: tuple[str, ...]) -> list[str]:
             sig = _signature(obj, module)
             lines.append(f"{n}{sig}: {doc}" if doc else f"{n}{sig}")
         else:
-            lines.append(f"{n} = {obj:.4g}" if isinstance(obj, float) else f"{n} = {obj!r}")
+            lines.append(f"{n} = {_literal(obj)}")
     return lines
 
 
