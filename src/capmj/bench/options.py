@@ -16,6 +16,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
 
 LLM_CONCURRENCY = 4
@@ -48,7 +49,6 @@ class Flag:
 
 def perception_mode(name: str) -> str:
     """A valid ``--perception`` value (the error lists them: state, rgbd and any plugins)."""
-    from capmj.errors import ConfigError
     from capmj.perception.plugins import check_mode
 
     try:
