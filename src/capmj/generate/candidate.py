@@ -132,7 +132,7 @@ def _pick_examples(ctx: Context, conv: Conversation, prop: dict[str, Any]) -> li
     text = prompts.render("pick.txt", name=prop["name"], goal=prop["goal"], objects=json.dumps(prop.get("objects", [])),
                           why=prop.get("why", ""))
     answer = conv.ask(text, "generate.pick_examples")
-    known = {t.name for t in ctx.library}
+    known = {t.name for t in ctx.library if t.example}
     try:
         picked = [n for n in extract_json(answer) if isinstance(n, str) and n in known]
     except (ValueError, TypeError):
@@ -145,7 +145,7 @@ def _pick_examples(ctx: Context, conv: Conversation, prop: dict[str, Any]) -> li
 
 def _write(ctx: Context, conv: Conversation, prop: dict[str, Any], examples: list[str]) -> str:
     by = {t.name: t for t in ctx.library}
-    sources = "\n\n".join(f"# ===== {n} =====\n{by[n].source}" for n in examples)
+    sources = "\n\n".join(f"# ===== {n} =====\n{by[n].example}" for n in examples)
     text = prompts.render("examples.txt", sources=sources, name=prop["name"], goal=prop["goal"])
     return extract_code(conv.ask(text, "generate.write"))
 

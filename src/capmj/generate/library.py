@@ -17,20 +17,23 @@ from types import ModuleType
 
 from capmj.confine.allowlist import CAPMJ_API, ordered_members
 from capmj.errors import CapmjError
+from capmj.generate.examples import NotSelfContained, self_contained
 from capmj.tasks import registry
 
 MAX_SOURCE_CHARS = 12_000
-"""An example's module source is cut beyond this (a prompt budget, not a correctness limit)."""
+"""An example is cut beyond this (a prompt budget, not a correctness limit)."""
 
 
 @dataclass(frozen=True)
 class LibraryTask:
-    """One installed task: its name, a sample goal (seed 0), its docstring summary and source."""
+    """One installed task: its name, a sample goal (seed 0), its docstring summary, and its module
+    as the writing turn shows it (:func:`~capmj.generate.examples.self_contained`; ``""`` when
+    it cannot be shown importing only the task API)."""
 
     name: str
     goal: str
     summary: str
-    source: str
+    example: str
 
 
 def load_library() -> tuple[LibraryTask, ...]:
@@ -48,18 +51,18 @@ def load_library() -> tuple[LibraryTask, ...]:
         summary = doc.strip().splitlines()[0] if doc.strip() else ""
         module = sys.modules.get(type(task).__module__)
         try:
-            source = inspect.getsource(module) if module is not None else ""
-        except (OSError, TypeError):
-            source = ""
-        out.append(LibraryTask(info.name, goal, summary, source[:MAX_SOURCE_CHARS]))
+            example = self_contained(inspect.getsource(module)) if module is not None else ""
+        except (OSError, TypeError, SyntaxError, NotSelfContained):
+            example = ""
+        out.append(LibraryTask(info.name, goal, summary, example[:MAX_SOURCE_CHARS]))
     return tuple(out)
 
 
 def similar(name: str, goal: str, library: tuple[LibraryTask, ...], k: int = 3) -> list[str]:
-    """The ``k`` library names sharing most words with the proposal (a deterministic fallback
-    when the LLM's picks are unusable)."""
+    """The ``k`` names of library tasks with an example sharing most words with the proposal (a
+    deterministic fallback when the LLM's picks are unusable)."""
     words = set(name.split("-")) | set(goal.lower().replace(".", " ").split())
-    scored = sorted(library, key=lambda t: (-len(words & (set(t.name.split("-")) | set(t.goal.lower().split()))), t.name))
+    scored = sorted((t for t in library if t.example), key=lambda t: (-len(words & (set(t.name.split("-")) | set(t.goal.lower().split()))), t.name))
     return [t.name for t in scored[:k]]
 
 
