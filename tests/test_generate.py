@@ -177,8 +177,16 @@ def test_broken_candidates_rejected_at_their_stage(tmp_path, monkeypatch):
     files = ["broken_import_os.py", "broken_open_call.py", "broken_solved_at_reset.py", "broken_wrong_zone.py",
              "broken_absent_colour.py"]
     cands = [candidate(f) for f in files]
+    journal: list[list[int]] = []  # what generation.jsonl holds each time a candidate finishes
+
+    def done(rec):
+        lines = (tmp_path / "out" / "generation.jsonl").read_text().splitlines()
+        journal.append([json.loads(x)["index"] for x in lines])
+        assert json.loads(lines[-1])["index"] == rec.index
+
     with StubLLMServer(responder=GeneratorScript(cands)) as server:
-        result = generate(config(server, tmp_path, "out", n=len(cands), workers=2))
+        result = generate(config(server, tmp_path, "out", n=len(cands), workers=2), on_done=done)
+    assert [len(x) for x in journal] == list(range(1, len(cands) + 1))  # kept as they finish, not at the end
     recs = {r.name: r for r in result.records}
     for c in cands:
         rec = recs[c.name]

@@ -106,6 +106,10 @@ def _readme(cfg: GenerateConfig, records: Sequence[CandidateRecord]) -> str:
     return "\n".join(lines)
 
 
+JOURNAL = "generation.jsonl"
+"""One JSON line per candidate: appended as each finishes, rewritten in index order at the end."""
+
+
 def write_package(cfg: GenerateConfig, records: Sequence[CandidateRecord]) -> list[CandidateRecord]:
     """Write the package of the accepted records (if any), the README and generation.jsonl.
 
@@ -127,10 +131,10 @@ def write_package(cfg: GenerateConfig, records: Sequence[CandidateRecord]) -> li
         test.write_text(_TEST.format(test_file=TEST_FILE, names=[r.name for r in acc], seeds=cfg.seeds,
                                      rate=cfg.accept_rate, tag=GENERATED_TAG), encoding="utf-8")
     (out / "README.md").write_text(_readme(cfg, records), encoding="utf-8")
-    with open(out / "generation.jsonl", "w", encoding="utf-8") as f:
+    with open(out / JOURNAL, "w", encoding="utf-8") as f:
         for r in records:
             f.write(json.dumps(r.to_dict()) + "\n")
     return acc
 
 
-__all__ = ["TEST_FILE", "module_name", "write_package"]
+__all__ = ["JOURNAL", "TEST_FILE", "module_name", "write_package"]

@@ -7,6 +7,7 @@ order they finish in, so two runs over the same LLM answers write the same files
 
 from __future__ import annotations
 
+import json
 import os
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -16,7 +17,7 @@ from typing import Callable
 from capmj.generate.candidate import CandidateRecord, Context, run_candidate
 from capmj.generate.config import GenerateConfig
 from capmj.generate.library import load_library
-from capmj.generate.package import write_package
+from capmj.generate.package import JOURNAL, write_package
 from capmj.llm import LLMClient, LLMConfig
 
 
@@ -50,15 +51,23 @@ def _dedupe(records: list[CandidateRecord]) -> None:
 
 
 def generate(cfg: GenerateConfig, *, on_done: Callable[[CandidateRecord], None] | None = None) -> RunResult:
-    """Run the generator described by ``cfg``; write the package, README and generation.jsonl."""
+    """Run the generator described by ``cfg``; write the package, README and generation.jsonl.
+
+    Each candidate's line is appended to ``generation.jsonl`` as soon as it finishes, so a run
+    killed after hours with a slow model keeps what it learnt; the end of the run rewrites the
+    file in candidate order, deduplicated.
+    """
     cfg.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(cfg, _client(cfg), load_library(), cfg.out)
     records: list[CandidateRecord] = []
+    progress = cfg.out / JOURNAL
     with ThreadPoolExecutor(max_workers=cfg.workers) as pool:
         futures = [pool.submit(run_candidate, ctx, i) for i in range(cfg.n)]
         for fut in as_completed(futures):
             rec = fut.result()
             records.append(rec)
+            with open(progress, "a", encoding="utf-8") as f:
+                f.write(json.dumps(rec.to_dict()) + "\n")
             if on_done:
                 on_done(rec)
     records.sort(key=lambda r: r.index)
