@@ -81,6 +81,26 @@ def test_the_predicate_reporter_is_always_right_on_states_that_keep_their_labels
     assert [(c["task"], c["case"]) for c in cases] == [(r["task"], r["case"]) for r in judged]
 
 
+def test_a_killed_judge_keeps_every_state_judged_so_far(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from capmj.judge.evaluate import Judge
+
+    real, seen = Judge.judge, []
+
+    def judge_then_die(self: Judge, case: Any) -> Any:
+        if len(seen) == 2:
+            raise KeyboardInterrupt  # the user's Ctrl-C, or a killed session, in the third state
+        seen.append(case.case)
+        return real(self, case)
+
+    monkeypatch.setattr(Judge, "judge", judge_then_die)
+    with pytest.raises(KeyboardInterrupt):
+        judge(tmp_path, "--reporter", "predicate")
+    kept = [json.loads(line) for line in (tmp_path / "out" / "judged.jsonl").read_text().splitlines()]
+    assert [r["case"] for r in kept] == seen and all(r["correct"] for r in kept)
+    assert len((tmp_path / "out" / "transcripts.jsonl").read_text().splitlines()) == 2
+    assert not (tmp_path / "out" / "summary.json").exists()
+
+
 def test_failing_checking_code_falls_back_to_the_direct_verdict_and_the_sources_say_so(
         server: StubLLMServer, tmp_path: Path) -> None:
     def broken_then_no(request: dict[str, Any]) -> str:

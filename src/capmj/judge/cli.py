@@ -170,7 +170,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
         skipped += [{"kind": RUN_KIND, "reason": p} for p in problems]
     _write_jsonl(out / "cases.jsonl", [c.to_dict() for c in cases])
     _write_jsonl(out / "skipped.jsonl", skipped)
-    records, transcripts, stopped = _judge_all(judge, cases, args)
+    records, transcripts, stopped = _judge_all(judge, cases, args, out)
     _write_jsonl(out / "judged.jsonl", records)
     _write_jsonl(out / "transcripts.jsonl", transcripts)
     summary: dict[str, Any] = {"reporter": config.label, "reporter_prompt": config.reporter_prompt,
@@ -191,8 +191,14 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     return EXIT_BUDGET if stopped else 0
 
 
-def _judge_all(judge: Any, cases: list[Any], args: argparse.Namespace
+def _judge_all(judge: Any, cases: list[Any], args: argparse.Namespace, out: Path
                ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str | None]:
+    """Judge the cases in order.  Each verdict and transcript is appended to ``judged.jsonl`` /
+    ``transcripts.jsonl`` as it arrives (a small local model takes minutes per state, so a killed
+    run keeps every state judged so far); the caller rewrites both files whole at the end."""
+    journals = [out / "judged.jsonl", out / "transcripts.jsonl"]
+    for path in journals:
+        path.write_text("", encoding="utf-8")
     bar: Any = None
     if not args.no_progress and cases:
         from tqdm import tqdm
@@ -212,6 +218,9 @@ def _judge_all(judge: Any, cases: list[Any], args: argparse.Namespace
             rec, calls = judge.judge(case)
             records.append(rec)
             transcripts.append({"task": case.task, "seed": case.seed, "case": case.case, "calls": calls})
+            for path, row in zip(journals, (rec, transcripts[-1])):
+                with open(path, "a", encoding="utf-8") as f:
+                    f.write(json.dumps(row, sort_keys=True) + "\n")
             tokens += rec["prompt_tokens"] + rec["completion_tokens"]
             cost += rec["cost_usd"] or 0.0
             if bar is not None:
