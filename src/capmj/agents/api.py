@@ -269,6 +269,10 @@ class PlannerAPI:
             return list(targ)
         raise ValueError(f"targ must be a name, a position, a pose or a list of them, got {_summary(targ, 80)}")
 
+    def _reset_scene(self) -> None:
+        """The episode's initial scene back, within the attempt (a plan's ``reset()``)."""
+        self._ctx.reset_scene()
+
     def _put(self, obj: Any, target: Any) -> None:
         w = self._world
         if obj is None or target is None:
@@ -521,6 +525,7 @@ API_FUNCTIONS: tuple[str, ...] = (
     "get_corner_name",
     "get_side_name",
     "get_color",
+    "reset",
 )
 """The names of the planner API functions (methods of :class:`PlanFunctions`), in the order
 :meth:`PlannerAPI.functions` returns them."""
