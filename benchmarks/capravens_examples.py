@@ -16,7 +16,10 @@ capmj's sandbox against a real MuJoCo scene:
   the scene of the capmj task ``put-block-into-matching-bowl`` (blocks and bowls).
 * Helper LMP calls the code makes are answered by :class:`Answers`, a scripted keyword resolver
   over the scene: fixtures so the example's own code can run without an LLM, never results.
-  They are bound only under the names capmj's environment provides.
+  They are bound only under the names capmj's environment provides.  A plan's own
+  ``parse_completion`` check (bound by capmj as the session's ``check``, the text reporter in a
+  real episode) answers False the first time and True after, so a check-and-retry example runs
+  its retry branch too (``reset()`` and the second try, on the real world).
 
 Classes, decided in this order:
 
@@ -28,8 +31,8 @@ Classes, decided in this order:
 * ``fails``: uses objects of a kind capmj lacks (cylinders, lines), calls an API function of the
   original capmj does not provide, or any other error in capmj (quoted, no code).
 * ``mapping``: fails with an error naming a documented difference (a
-  :class:`~capmj.errors.PortingDifference`, or a name capmj's benchmark owns: ``reset``,
-  ``parse_completion`` in a plan); runs once the original's conventions are emulated (one-element
+  :class:`~capmj.errors.PortingDifference`, or a name capmj refuses where the original bound it:
+  ``NameError: X() cannot be called``); runs once the original's conventions are emulated (one-element
   position lists, ``get_bbox`` sizes); or runs but reads ``get_bbox`` as CapRavens' sizes, which
   capmj's bounds are not (it runs, with other numbers).
 * ``unchanged``: runs as written and sets its return variable.
@@ -249,6 +252,7 @@ class Answers:
 
     def __init__(self, fns: dict[str, Callable[..., Any]]) -> None:
         self.fns = fns
+        self.checks = 0
 
     def _scope(self, context: Any) -> list[str]:
         quoted = re.findall(r"'([^']+)'|\"([^\"]+)\"", context) if isinstance(context, str) else []
@@ -304,7 +308,9 @@ class Answers:
         return False
 
     def parse_completion(self, query: Any, context: Any = None) -> bool:
-        return True
+        """False on the first check, True after: a plan's retry branch runs once."""
+        self.checks += 1
+        return self.checks > 1
 
     def transform_shape_pts(self, query: Any, context: Any = None) -> Any:
         return self.parse_position("3 points")
@@ -356,8 +362,9 @@ def _reason(exc: BaseException) -> str:
 def _environment(ex: Example, ctx: EpisodeContext, original: bool) -> tuple[dict[str, Any], LMPSession]:
     api = PlannerAPI(ctx)
     fns = api.functions()
+    answers = Answers(fns)
     session = LMPSession(complete=_no_llm, api=fns, objects_text=api.objects_text,
-                         rng=np.random.default_rng(ctx.seed))
+                         rng=np.random.default_rng(ctx.seed), check=answers.parse_completion)
     if ex.lmp in ("planner", "fgen"):
         env = session.plan_env()
         env["objects"] = api.object_names()
@@ -366,7 +373,6 @@ def _environment(ex: Example, ctx: EpisodeContext, original: bool) -> tuple[dict
         env = session.helper_env(ex.context or api.objects_text())
         if ex.lmp == "parse_completion":
             env.update(reporter_env(fns, ctx.world.objects, ex.query[1:].strip()))
-    answers = Answers(fns)
     for name in LMP_NAMES:
         if name in env:
             env[name] = getattr(answers, name)
@@ -459,7 +465,8 @@ def classify(ex: Example, seed: int, library: dict[str, Any]) -> tuple[str, str]
         if any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "get_bbox"
                for n in ast.walk(tree)):
             return "mapping", ("runs, but reads get_bbox as CapRavens' sizes (size_x, size_y, size_z) of the first "
-                               "object; capmj's get_bbox gives world bounds per object, so its numbers differ")
+                               "object; capmj's get_bbox gives the world bounds (xmin, ymin, zmin, xmax, ymax, zmax) "
+                               "the thesis states, so its numbers differ")
         return "unchanged", ""
     inner = _cause(failure)
     m = re.search(r"NameError: name '(\w+)' is not defined", str(failure))

@@ -205,3 +205,18 @@ def test_a_porting_difference_is_labelled_as_the_value_error_it_was():
     from capmj.bench.failures import _error_label
 
     assert _error_label("PortingDifference", None) == _error_label("ValueError", None) == "api_misuse"
+
+
+def test_get_bbox_of_a_list_is_its_first_objects_world_box(scene):
+    """CapRavens' get_bbox took the first name of a list; capmj does too, and gives the world box
+    (xmin, ymin, zmin, xmax, ymax, zmax), not the original's sizes."""
+    _api, f, ctx = scene
+    red, purple = ctx.world.objects_by_id[2].name, ctx.world.objects_by_id[5].name
+    first = f["get_bbox"]([purple, red])
+    assert first == f["get_bbox"](purple) and len(first) == 6
+    x, y, z = f["get_obj_pos"](purple)
+    assert first[0] < x < first[3] and first[1] < y < first[4] and first[2] < z < first[5]
+    assert 0.04 <= first[5] - first[2] < 0.045  # a small block's height, read as zmax - zmin
+    assert f["get_bbox"]((red,)) == f["get_bbox"](red)
+    with pytest.raises(ValueError, match="a list gives its first object's box"):
+        f["get_bbox"]([])

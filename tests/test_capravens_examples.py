@@ -90,3 +90,28 @@ def test_each_outcome_gets_its_class(harness):
     assert got["planner#6"] == ("fails", "uses cylinder objects, a kind capmj does not have")
     (check,) = harness.split_examples("parse_completion", CHECKER)
     assert harness.classify(check, 10001, {}) == ("unchanged", "")  # near-miss keys of object_positions
+
+
+CHECK_AND_RETRY = """# Task Examples
+# ---------------------------------------------------------------------------
+
+objects = ['red block with obj_id 1', 'green zone with obj_id 2', 'blue block with obj_id 3']
+# put the red block in the green zone, check, and try again.
+put_first_on_second('red block with obj_id 1', [0.4, 0.3])
+if not parse_completion('the red block in the green zone', f'object_positions = {get_obj_pos_dict()}'):
+    reset()
+    assert np.linalg.norm(np.array(get_obj_pos('red block with obj_id 1'))[:2] - [0.4, 0.3]) > 0.03
+    put_first_on_second('red block with obj_id 1', 'green zone with obj_id 2')
+box = get_bbox(['blue block with obj_id 3', 'red block with obj_id 1'])
+assert box == get_bbox('blue block with obj_id 3')
+"""
+
+
+def test_a_plan_that_checks_itself_resets_and_retries_runs_unchanged(harness):
+    """The scripted check answers False first: the retry branch runs, and reset() really brought
+    the block back (the example's own assert), on the real world."""
+    (plain,) = harness.split_examples("planner", CHECK_AND_RETRY.split("box = ")[0])
+    assert harness.classify(plain, 10001, {}) == ("unchanged", "")
+    (ex,) = harness.split_examples("planner", CHECK_AND_RETRY)  # + get_bbox of a list: its first object's box
+    cls, reason = harness.classify(ex, 10001, {})
+    assert cls == "mapping" and "reads get_bbox as CapRavens' sizes" in reason  # it ran; the numbers differ

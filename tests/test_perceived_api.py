@@ -36,6 +36,28 @@ def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_m
     assert lo == pytest.approx(hi, abs=0.004)  # the upper block is perceived resting on the lower one
 
 
+def test_a_plans_reset_is_perceived_afresh() -> None:
+    """After reset() the cameras see the initial scene again: the same names and positions as the
+    first view, though the moved block was last perceived elsewhere."""
+    task = get_task("stack-blocks-of-same-color")
+    scene = make_scene(task, 10003)
+    world = World(scene.objects)
+    world.settle()
+    api = PerceivedAPI(EpisodeContext(task, 10003, scene, world))
+    fns = api.functions()
+    names = fns["get_obj_names"]()
+    block = next(n for n in names if n.startswith("movable"))
+    start = fns["get_obj_pos"](block)
+    assert abs(start[0] - 0.4) + abs(start[1] - 0.3) > 0.05  # the put below really moves it
+    fns["put_first_on_second"](block, [0.4, 0.3])
+    assert fns["get_obj_pos"](block)[:2] == pytest.approx([0.4, 0.3], abs=0.01)
+    fns["reset"]()
+    assert api.scene.calls == 3 and fns["get_obj_names"]() == names
+    # the initial scene again, to perception's resolution (the first pictures showed the poses
+    # MuJoCo computed before its last settle step integrated, the restored ones the state itself)
+    assert fns["get_obj_pos"](block) == pytest.approx(start, abs=1e-3)
+
+
 @pytest.mark.parametrize("task", ["put-block-into-mismatching-bowl", "stack-all-blocks-on-a-zone"])
 def test_reference_plan_succeeds_in_rgbd_mode(task: str) -> None:
     r = run_episode(get_task(task), 10005, ReferenceAgent(perception="rgbd"))

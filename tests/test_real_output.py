@@ -170,11 +170,12 @@ def test_cache_only_with_a_missing_entry_fails_the_episode_without_http(server: 
 # 3. names owned by the API, the LMPs or the episode are never synthesised
 # ------------------------------------------------------------------------------------------------
 def test_reserved_names_in_the_plan_are_errors_not_synthesised(server: StubLLMServer) -> None:
-    router = plan_only(server, "say('x')\nreset()\nput_first_on_second(1, 2)")
+    router = plan_only(server, "say('x')\ntabletop_ui('do it')\nput_first_on_second(1, 2)")
     result = episode(agent(server))
     assert result.error is not None and "parse_function" not in router.seen
-    assert "line 2 of the plan: `reset()`: NameError: reset() cannot be called in the plan" in result.error
-    assert "resets the scene between attempts" in result.error and "put_first_on_second" in result.error
+    assert ("line 2 of the plan: `tabletop_ui('do it')`: NameError: tabletop_ui() cannot be called in the plan"
+            in result.error)
+    assert "it is the planner itself" in result.error and "put_first_on_second" in result.error
     assert result.primitives == 0
 
 

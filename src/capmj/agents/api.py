@@ -269,6 +269,10 @@ class PlannerAPI:
             return list(targ)
         raise ValueError(f"targ must be a name, a position, a pose or a list of them, got {_summary(targ, 80)}")
 
+    def _reset_scene(self) -> None:
+        """The episode's initial scene back, within the attempt (a plan's ``reset()``)."""
+        self._ctx.reset_scene()
+
     def _put(self, obj: Any, target: Any) -> None:
         w = self._world
         if obj is None or target is None:
@@ -375,14 +379,19 @@ class PlanFunctions(CapRavensFunctions):
         return [Coordinate(v) for v in self._api._quat_xyzw(self._api._resolve(obj).obj_id)]
 
     def get_bbox(self, obj):
-        """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m); list in → list out.
+        """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m), the thesis's box, not
+        the sizes CapRavens' code returned (sizes are xmax − xmin, ...).  A list of names gives the
+        box of its first object, as CapRavens' did: its examples pass a list of like blocks to ask
+        one block's box.
 
         The box around the object as it is turned now: a square zone of side s turned by yaw θ
         spans s (|cos θ| + |sin θ|) in x and in y, more than s; its side is the box width divided
         by that factor (yaw from :meth:`get_obj_rot`).  Round objects (bowls, balls) give the box
         of their disc whatever their yaw."""
         if isinstance(obj, (list, tuple, np.ndarray)):
-            return [self.get_bbox(o) for o in obj]
+            if len(obj) == 0:
+                raise ValueError("get_bbox needs an object name (a list gives its first object's box), got []")
+            return self.get_bbox(obj[0])
         o = self._api._resolve(obj)
         lo, hi = self._api._world.aabb(o.obj_id)
         if o.kind in ROUND_KINDS:  # the geoms' boxes turn with the yaw, the disc does not
@@ -521,6 +530,7 @@ API_FUNCTIONS: tuple[str, ...] = (
     "get_corner_name",
     "get_side_name",
     "get_color",
+    "reset",
 )
 """The names of the planner API functions (methods of :class:`PlanFunctions`), in the order
 :meth:`PlannerAPI.functions` returns them."""

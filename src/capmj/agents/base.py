@@ -90,6 +90,21 @@ class EpisodeContext:
         self.placements = {}
         self._attempt_steps0 = self.world.steps
 
+    def reset_scene(self) -> None:
+        """Restore the episode's initial scene *within* the current attempt: a plan's ``reset()``
+        (CapRavens' plans reset and retried after their own failed check).
+
+        The world returns to exactly the state :meth:`reset` returns to: the settled initial scene
+        physics produced, not a pose anyone invented.  Unlike :meth:`reset` it opens no new attempt
+        and refunds nothing: the pick-and-places and simulation steps spent before still count
+        against the attempt's budgets (the world's step counter goes back with the state), so a
+        plan cannot reset its way past them."""
+        spent = self.world.steps - self._attempt_steps0
+        self.world.restore(self._initial)
+        self.arm = Primitives(self.world, self.arm.cfg)
+        self.placements = {}
+        self._attempt_steps0 = self.world.steps - spent
+
     def next_attempt(self) -> None:
         """Start a new attempt from the state the last one left (a re-plan that keeps the scene,
         the ``careful`` loop's partial re-plan): budgets count afresh, nothing is restored."""

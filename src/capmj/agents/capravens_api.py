@@ -1,12 +1,12 @@
 """CapRavens' names in the planner API: functions its prompt code calls that capmj's own prompts
 do not use.
 
-CapRavens' few-shot examples call ``denormalize_xy``, ``denormalize_bbox``, ``is_obj_visible`` and
-``bbox_contains_pt``; capmj's prompts have their own names for most of that (``denormalize``,
-``is_target_occupied``).  The methods of :class:`CapRavensFunctions` make the original's code run
+CapRavens' few-shot examples call ``denormalize_xy``, ``denormalize_bbox``, ``is_obj_visible``,
+``bbox_contains_pt`` and ``reset``; capmj's prompts have their own names for most of that
+(``denormalize``, ``is_target_occupied``) and leave resetting to the benchmark's loop.  The methods of :class:`CapRavensFunctions` make the original's code run
 as written (``benchmarks/capravens_examples.py`` counts how much does); :class:`~capmj.agents.api.
 PlanFunctions` inherits them, so they are planner API functions like any other (named in
-``API_FUNCTIONS``, logged, read-only).  They are not listed in ``prompts/planner.py``: small
+``API_FUNCTIONS``, logged; all read-only but ``reset``, which only plan code gets).  They are not listed in ``prompts/planner.py``: small
 models read that prompt, and these names only serve code ported from CapRavens (the porting table
 of ``docs/llm.md`` lists them).  Names are resolved and geometry computed by the
 :class:`~capmj.agents.api.PlannerAPI` and :mod:`capmj.agents.footprints`, as for every function.
@@ -76,3 +76,19 @@ class CapRavensFunctions:
             raise ValueError(f"bbox_contains_pt needs two different objects, got {obj.name!r} twice")
         xy = api._pos(obj.obj_id)[:2]
         return api._footprints.distance(xy, container) <= INSIDE_TOL
+
+    def reset(self) -> None:
+        """CapRavens' ``reset()``: the scene back to the episode's initial state, so a plan whose
+        own check failed can try again from the start (its examples do: check, ``reset()``,
+        retry).  The original re-ran ``env.reset()`` with the episode's seed, i.e. rebuilt the
+        same initial scene; capmj restores the settled initial state the episode began from,
+        exactly as the benchmark's re-plan reset does (spec: "a reset of the scene to the
+        episode's initial state"): a state physics produced, with no object put where no robot
+        could have put it.  It does not open a new attempt: the pick-and-places and simulation
+        steps spent before it still count against the attempt's budgets.  Recorded in the call
+        log and as ``planner/reset`` in the episode's log."""
+        api = self._api
+        before = api._world.time
+        api._reset_scene()
+        api._ctx.recorder.text("planner/reset", f"scene reset to the episode's initial state at t={before:.2f}s "
+                               "(budgets keep counting)", api._world.time)

@@ -52,9 +52,10 @@ RESERVED: dict[str, str] = {
     "parse_question": "it is a helper LMP that the plan and helper code up to LMPSession.max_helper_depth "
                       "levels deep may call: parse_question(question, context=None) returns the answer",
     "parse_function": "it writes missing functions before code runs; code does not call it",
-    "parse_completion": "it is the reporter's checker, run by the benchmark after the plan",
+    "parse_completion": "it is the text reporter's check: only the plan of an agent with an LLM may call it, "
+                        "parse_completion(goal, context=None) returns whether the goal is achieved now",
     "tabletop_ui": "it is the planner itself; write the plan's statements directly",
-    "reset": "the benchmark resets the scene between attempts; code cannot reset it",
+    "reset": "it restores the episode's initial scene, which only the plan may do",
     "run_code": "code cannot run code",
     "exec_safe": "code cannot run code",
 }

@@ -47,6 +47,7 @@ from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
 from capmj.agents.loop_policy import Outcome, check_policy, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
+from capmj.agents.plan_check import plan_check
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import REPORTER_PROMPTS, REPORTERS, Report, make_reporter
 from capmj.agents.sandbox import SandboxBudget
@@ -263,6 +264,7 @@ class LLMAgent:
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
                              lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
+        session.check = plan_check(session, ctx)  # a plan's own parse_completion (CapRavens' plans check and retry)
         before = len(client.records)
         outcome = PlanOutcome()
         error: BaseException | None = None

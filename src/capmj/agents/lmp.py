@@ -52,8 +52,9 @@ __all__ = [
     "undefined_calls",
 ]
 
-ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order"})
-"""API functions that move the robot: only the planner's code may call them, never a helper LMP."""
+ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order", "reset"})
+"""API functions that change the scene (the robot moves, or ``reset`` restores the initial scene):
+only the planner's code may call them, never a helper LMP."""
 
 
 def find_llm_error(exc: BaseException | None) -> LLMError | None:
@@ -134,6 +135,10 @@ class LMPSession:
     the objects it measures); deeper code gets an error naming the limit, so two helpers asking
     each other cannot loop."""
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+    check: Callable[..., Any] | None = None
+    """The plan's ``parse_completion(goal, context=None)``: the text reporter over the current scene
+    (:func:`capmj.agents.plan_check.plan_check`), bound by the agent that has one; None, plan code
+    cannot call it."""
     _counters: dict[str, int] = field(default_factory=dict)
     _system: str | None = None
     _helper_depth: int = 0
@@ -204,11 +209,14 @@ class LMPSession:
 
     def plan_env(self) -> dict[str, Any]:
         """What plan code may use: the whole API plus the helper LMPs (parse_obj_name,
-        parse_position, parse_question)."""
+        parse_position, parse_question) and, when the session has a :attr:`check`, the reporter's
+        ``parse_completion`` (CapRavens' plans check themselves and retry)."""
         env: dict[str, Any] = dict(self.api)
         env["parse_obj_name"] = self.parse_obj_name
         env["parse_position"] = self.parse_position
         env["parse_question"] = self.parse_question
+        if self.check is not None:
+            env["parse_completion"] = self.check
         return env
 
     # -- code preparation --------------------------------------------------------------------

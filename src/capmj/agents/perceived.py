@@ -83,6 +83,12 @@ class PerceivedScene:
         self.tracker = self.tracker.update(self._perceive(), moved)
         self._observed()
 
+    def restart(self) -> None:
+        """Perceive afresh after the world went back to its initial scene (a plan's ``reset()``):
+        a new track, as at the start, since no move of the robot explains the change."""
+        self.tracker = Tracker.start(self._perceive())
+        self._observed()
+
     def close(self) -> None:
         self._rig.close()
 
@@ -166,6 +172,10 @@ class PerceivedAPI(PlannerAPI):
         self._perceiving = PerceivingContext(ctx, self.scene, audit)
         self._ctx = self._perceiving  # type: ignore[assignment]
         self._footprints = self.scene.footprints()
+
+    def _reset_scene(self) -> None:
+        super()._reset_scene()
+        self.scene.restart()
 
     def _put(self, obj: Any, target: Any) -> None:
         """The API's pick-and-place; a miss perception caused is a :class:`PerceptionFailed`."""
