@@ -62,6 +62,14 @@ def test_static_checks_reject_without_running():
     assert extract_code("text\n```python\nx = 1\n```\nmore") == "x = 1\n"
 
 
+def test_a_syntax_error_shows_the_lines_that_lead_to_it():
+    # a 1.5B model's real mistake: a continuation line without brackets; the repair turn must show line 2
+    code = 'def f(x):\n    why = f"{x} is not "\n                f"in the zone"\n    return why\n'
+    detail = static_checks(code)[0].detail
+    assert "(line 3)" in detail and '    2 |     why = f"{x} is not "' in detail and '>    3 |' in detail
+    assert "line 4" not in detail and "return why" not in detail
+
+
 # --------------------------------------------------------------------------------------- CLI input
 @pytest.mark.parametrize("argv, words", [
     (["--mode", "top-down", "--model", "m", "--out", "OUT"], "--name"),

@@ -41,6 +41,19 @@ def extract_json(answer: str) -> Any:
     return value
 
 
+CONTEXT_LINES = 3
+"""Lines shown up to a syntax error's line: the cause is often the line before (an unclosed
+bracket, a continuation without one), and a small model repairs what it is shown."""
+
+
+def _lines_before(code: str, lineno: int | None) -> str:
+    lines = code.splitlines()
+    if not lineno or lineno > len(lines):
+        return ""
+    first = max(1, lineno - CONTEXT_LINES + 1)
+    return "".join(f"\n{'>' if i == lineno else ' '} {i:4d} | {lines[i - 1]}" for i in range(first, lineno + 1))
+
+
 def static_checks(code: str) -> tuple[CheckResult, ...]:
     """``parse``, ``imports`` and ``names`` in order; after a failure the rest are skipped."""
     try:
@@ -48,6 +61,7 @@ def static_checks(code: str) -> tuple[CheckResult, ...]:
         compile(tree, "<task>", "exec")
     except SyntaxError as e:
         msg = f"SyntaxError: {e.msg} (line {e.lineno})" + (f": {e.text.strip()}" if e.text else "")
+        msg += _lines_before(code, e.lineno)
         return (CheckResult("parse", "fail", msg), CheckResult("imports", "skip"), CheckResult("names", "skip"))
     out = [CheckResult("parse", "pass", f"{len(code.splitlines())} lines")]
     bad = import_findings(tree)
