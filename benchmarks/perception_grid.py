@@ -90,8 +90,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--state", type=Path, required=True, help="run folder of the agent in state mode")
     ap.add_argument("--rgbd", type=Path, required=True, help="run folder of the same grid in rgbd mode")
+    ap.add_argument("--note", default=None, help="how the runs were made (machine, commands), kept in the JSON")
     args = ap.parse_args(argv)
-    json.dump(compare(args.state, args.rgbd), sys.stdout, indent=1, sort_keys=True)
+    out = compare(args.state, args.rgbd)
+    if args.note:
+        out["note"] = args.note
+    json.dump(out, sys.stdout, indent=1, sort_keys=True)
     print()
     return 0
 
