@@ -120,6 +120,33 @@ def test_wheel_ships_every_prompt_and_mjcf_file(wheel):
     assert not any(n.startswith(("capmj/prompts/", "capmj/mjcf/")) and n.endswith("__init__.py") for n in names)
 
 
+PERCEIVERS = """
+import json
+from importlib.metadata import entry_points
+from capmj.perception.plugins import load_perceiver, perception_modes, source_tree_entry_points
+
+eps = [[e.name, e.value, e.dist.metadata["Name"]] for e in entry_points(group="capmj.perceivers")]
+print(json.dumps({"eps": eps, "modes": list(perception_modes()), "rgbd": type(load_perceiver("rgbd")).__name__,
+                  "source_tree": len(source_tree_entry_points())}))
+"""
+
+
+def test_wheel_declares_the_rgbd_perceiver_as_an_entry_point(wheel, installed, tmp_path):
+    """capmj's own perceiver comes from its metadata, as a plugin's would: the wheel's
+    entry_points.txt names it and importlib.metadata lists it where no source tree is at hand."""
+    text = next(zipfile.ZipFile(wheel).read(n).decode() for n in zipfile.ZipFile(wheel).namelist()
+                if n.endswith(".dist-info/entry_points.txt"))
+    group = text.split("[capmj.perceivers]")[1].split("[")[0]
+    assert "rgbd = capmj.perception.perceiver:ClassicalPerceiver" in group
+    py, env = installed
+    run = _run(py, ["-c", PERCEIVERS], tmp_path, env)
+    assert run.returncode == 0, run.stderr
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    assert got["eps"] == [["rgbd", "capmj.perception.perceiver:ClassicalPerceiver", "capmj"]]
+    assert got["modes"] == ["state", "rgbd"] and got["rgbd"] == "ClassicalPerceiver"
+    assert got["source_tree"] == 0  # no pyproject beside the installed package: the metadata alone answered
+
+
 def test_wheel_runs_reference_and_oracle_outside_the_source_tree(installed, tmp_path):
     py, env = installed
     run = _run(py, ["-c", EPISODES, TASK, str(SEED)], tmp_path, env)

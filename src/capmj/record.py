@@ -4,13 +4,24 @@ Every layer may emit events through a :class:`Recorder` without knowing where th
 writer in :mod:`capmj.log` implements it, and :class:`NullRecorder` is the default so that running
 an episode never requires a logger.  A recorder that stores poses by the thousand may also take
 them as arrays (:class:`ArrayFrames`), which spares the runner building a dict of tuples per frame.
+A recorder that draws what the robot perceived (``--perception rgbd``) also implements
+:class:`PerceptionViews`: after every perception call it is sent the planner API's objects as
+:class:`PerceivedBox` records, each already judged against the truth, with the call's errors.
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Protocol, runtime_checkable
+from dataclasses import dataclass
+from typing import Any, Literal, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
+
+from capmj.records.perception import PerceptionCall
+
+MatchStatus = Literal["right", "wrong", "false"]
+"""How a perceived object compares to the truth: ``right`` (matched, kind, colour and size right,
+centre within the error tolerance), ``wrong`` (matched, but a label wrong or the centre off),
+``false`` (no true object there)."""
 
 
 class Recorder(Protocol):
@@ -44,6 +55,36 @@ class ArrayFrames(Protocol):
         """Poses of the bodies ``names`` at simulated ``time``: ``pos`` (N, 3) and ``quat``
         (N, 4, MuJoCo's w, x, y, z) rows in ``names`` order.  The arrays are the recorder's to keep: the caller passes
         fresh copies."""
+
+
+@dataclass(frozen=True)
+class PerceivedBox:
+    """One object of the planner API's view after a perception call, as a box to draw.
+
+    The box is the detection's footprint: a square with its yaw for blocks and zones, else its
+    axis-aligned box (yaw 0).  ``visible`` is False for a block the tracker keeps although it is
+    hidden in a tower (drawn at its remembered pose)."""
+
+    obj_id: int
+    name: str
+    """The planner-facing name (``movable small red block with obj_id 3``)."""
+    center: tuple[float, float, float]
+    half_size: tuple[float, float, float]
+    yaw: float
+    confidence: float
+    visible: bool
+    match: MatchStatus
+    truth: int | None
+    """The obj_id of the true object it was matched to (None for a false detection)."""
+
+
+@runtime_checkable
+class PerceptionViews(Protocol):
+    """The perception views of an rgbd episode, for recorders that draw them."""
+
+    def perception(self, time: float, call: PerceptionCall, boxes: Sequence[PerceivedBox]) -> None:
+        """The planner API's objects after a perception call at simulated ``time`` (``boxes``)
+        and the call's errors against the truth (``call``, as in the episode's record)."""
 
 
 class NullRecorder:

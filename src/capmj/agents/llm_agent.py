@@ -116,7 +116,7 @@ class LLMAgent:
                  episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
                  price: str | None = None, perception: str = "state", loop_policy: str = "thesis",
                  reporter_prompt: str = "thesis") -> None:
-        self.perception = perception  # the planner API's source: capmj.agents.perceived.PERCEPTION_MODES
+        self.perception = perception  # the planner API's source: capmj.perception.plugins.perception_modes()
         self.loop_policy = check_policy(loop_policy)  # capmj.agents.loop_policy.LOOP_POLICIES
         if reporter_prompt not in REPORTER_PROMPTS:
             raise ConfigError(f"unknown reporter prompt {reporter_prompt!r}; valid: {', '.join(REPORTER_PROMPTS)}")

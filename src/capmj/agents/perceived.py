@@ -37,17 +37,12 @@ from capmj.agents.footprints import Footprints
 from capmj.agents.perception_audit import PerceptionAudit
 from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
-from capmj.perception.plugins import BUILTIN, STATE, load_perceiver
+from capmj.perception.plugins import STATE, load_perceiver
 from capmj.perception.track import Tracker
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import yaw_quat
 from capmj.sim.state import Pose
-
-PERCEPTION_MODES: tuple[str, ...] = (STATE, *BUILTIN)
-"""capmj's own modes — ``state``: the API reads the simulator (the default); ``rgbd``: it reads the
-cameras through the built-in perceiver.  Plugins add more (:func:`capmj.perception.plugins.perception_modes`)."""
-
 
 class PerceivedScene:
     """What the robot knows of the table: the tracked detections, as specs, poses and boxes.
@@ -197,4 +192,4 @@ def make_api(ctx: EpisodeContext, perception: str = "state") -> PlannerAPI:
     return PerceivedAPI(ctx, load_perceiver(perception), name=perception)
 
 
-__all__ = ["PERCEPTION_MODES", "PerceivedAPI", "PerceivedScene", "PerceivingContext", "make_api"]
+__all__ = ["PerceivedAPI", "PerceivedScene", "PerceivingContext", "make_api"]

@@ -10,6 +10,11 @@ objects (:func:`capmj.perception.score.score`) and writes a
 in the episode's result.  Nothing flows back into perception: the only thing the API takes from
 the audit is whether a failed pick must be reported as :class:`~capmj.errors.PerceptionFailed`
 rather than :class:`~capmj.errors.MotionFailed`, which changes the error's class, not its text.
+
+When the episode's recorder draws perception (:class:`capmj.record.PerceptionViews`, the ``.rrd``
+writer does), every view is also sent to it: the API's objects as boxes, each judged right, wrong
+or false by the same matching, and the call's figures — so the log shows what the robot believed
+beside the true objects, after every perception call.
 """
 
 from __future__ import annotations
@@ -21,12 +26,17 @@ from typing import Any, Sequence
 import numpy as np
 
 from capmj.agents.base import EpisodeContext
-from capmj.perception.score import TrueObject, score
-from capmj.perception.track import Tracker
+from capmj.perception.detect import Detection
+from capmj.perception.score import Score, TrueObject, score
+from capmj.perception.track import Tracked, Tracker
+from capmj.record import MatchStatus, PerceivedBox, PerceptionViews
 from capmj.records import PerceptionCall, PerceptionNotes
 from capmj.records.perception import POSITION_TOL_MM
 
-__all__ = ["NOTES_KEY", "PerceptionAudit", "true_objects"]
+__all__ = ["NOTES_KEY", "PerceptionAudit", "footprint_box", "perceived_boxes", "true_objects"]
+
+_SQUARES = ("block", "zone")
+"""Kinds whose detections are squares with a yaw; the others are drawn as their axis-aligned box."""
 
 NOTES_KEY = "perception"
 """The key of ``ctx.notes`` that holds the episode's :class:`PerceptionNotes`."""
@@ -56,6 +66,36 @@ def _mm(v: float | None) -> float | None:
     return None if v is None else round(float(v), 3)
 
 
+def footprint_box(d: Detection) -> tuple[tuple[float, float, float], tuple[float, float, float], float]:
+    """Centre, half size and yaw of the box drawn for ``d``: a square's side recovered from its
+    axis-aligned box and yaw (the box of a square of half side h turned by yaw has half width
+    h (|cos yaw| + |sin yaw|)), any other kind's axis-aligned box itself."""
+    lo, hi = np.asarray(d.aabb[0], float), np.asarray(d.aabb[1], float)
+    centre = tuple(float(v) for v in (lo + hi) / 2)
+    half = (hi - lo) / 2
+    yaw = float(d.yaw) if d.kind in _SQUARES else 0.0
+    if d.kind in _SQUARES:
+        side = float(half[:2].mean()) / (abs(math.cos(yaw)) + abs(math.sin(yaw)))
+        half[:2] = side
+    return centre, tuple(float(v) for v in half), yaw  # type: ignore[return-value]
+
+
+def perceived_boxes(tracked: Sequence[Tracked], s: Score, true_ids: Sequence[int]) -> tuple[PerceivedBox, ...]:
+    """The tracked objects as boxes, each judged by its match in ``s`` (see :data:`MatchStatus`)."""
+    by_det = {m.detection: m for m in s.matches}
+    out = []
+    for j, t in enumerate(tracked):
+        m = by_det.get(j)
+        status: MatchStatus = "false"
+        if m is not None:
+            right = m.kind_ok and m.color_ok and m.size_ok and 1000 * m.position_error <= POSITION_TOL_MM
+            status = "right" if right else "wrong"
+        centre, half, yaw = footprint_box(t.detection)
+        out.append(PerceivedBox(t.obj_id, t.name, centre, half, yaw, float(t.detection.confidence), t.visible,
+                                status, None if m is None else int(true_ids[m.truth])))
+    return tuple(out)
+
+
 class PerceptionAudit:
     """Scores one attempt's perceived views against the world (see the module docstring)."""
 
@@ -78,6 +118,9 @@ class PerceptionAudit:
         call = _call(self._ctx.attempt + 1, stage, s.to_dict())
         notes = self._notes()
         self._ctx.notes[NOTES_KEY] = replace(notes, calls=(*notes.calls, call))
+        recorder = self._ctx.recorder
+        if isinstance(recorder, PerceptionViews):
+            recorder.perception(float(self._ctx.world.time), call, perceived_boxes(tracked, s, ids))
 
     def pick_missed(self, held: int | None, pick: Sequence[float] | np.ndarray, gripped_true: int | None) -> bool:
         """Whether a pick missed because of perception: the plan meant perceived object ``held``,

@@ -7,6 +7,7 @@ and which are re-sent), :mod:`~capmj.log.clock` (the monotonic ``sim_time``),
 :mod:`~capmj.log.images` (camera images), :mod:`~capmj.log.geometry` (table, object shapes,
 robot), :mod:`~capmj.log.robot_mesh` (UR5e visual meshes with trimesh),
 :mod:`~capmj.log.verdict3d` (failing objects, diagnostics and targets in 3D),
+:mod:`~capmj.log.perception3d` (what an rgbd episode perceived, beside the true objects),
 :mod:`~capmj.log.attempts` (one Markdown document per LLM attempt), :mod:`~capmj.log.summary`
 (the episode summary), :mod:`~capmj.log.blueprint` (the viewer layout).
 

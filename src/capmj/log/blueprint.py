@@ -7,7 +7,8 @@
     |   3D: /world, seen from the front  |  other texts]                                 |
     |   camera's side (fixed eye point)  |                                               |
     |                                    +-----------------------------------------------+
-    |                                    | [primitives | say | front rgb | front depth]   |
+    |                                    | [primitives | say | perception | front rgb |    |
+    |                                    |  front depth]                                 |
     +------------------------------------+-----------------------------------------------+
 
 Every recording gets the same views (empty ones stay empty), so opening a second episode in the
@@ -20,7 +21,7 @@ which is why there are not more of them.
 
 from __future__ import annotations
 
-from capmj.log.paths import ATTEMPTS, CAMERA, PRIMITIVE_LOG, SUMMARY_PATH, TEXT, WORLD, attempt_entity
+from capmj.log.paths import ATTEMPTS, CAMERA, PERCEPTION_LOG, PRIMITIVE_LOG, SUMMARY_PATH, TEXT, WORLD, attempt_entity
 
 ATTEMPT_TABS = 3
 IMAGE_CAMERA = "front"
@@ -53,7 +54,8 @@ def episode_blueprint(attempts: int = 0, active_document: str | None = None):  #
              for k in range(1, max(ATTEMPT_TABS, attempts) + 1)]
     docs.append(rrb.TextDocumentView(origin=OTHER_TEXTS, name="other texts"))
     logs: list[rrb.View] = [rrb.TextLogView(origin=PRIMITIVE_LOG, name="primitives"),
-                            rrb.TextLogView(origin=SAY_LOG, name="say")]
+                            rrb.TextLogView(origin=SAY_LOG, name="say"),
+                            rrb.TextLogView(origin=PERCEPTION_LOG, name="perception")]  # rgbd mode: errors per view
     logs += [rrb.Spatial2DView(origin=f"{CAMERA}/{IMAGE_CAMERA}/{kind}", name=f"{IMAGE_CAMERA} {kind}")
              for kind in ("rgb", "depth")]
     layout = rrb.Horizontal(world, rrb.Vertical(rrb.Tabs(*docs, active_tab=active_document), rrb.Tabs(*logs),

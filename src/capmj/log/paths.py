@@ -13,11 +13,15 @@
 ``/world/primitives/<k>``               pick (yellow) / place (blue) points and the pick->place arrow of
                                         primitive k, from its start on; ``.../final`` where the moved
                                         object ended, green when its goal condition holds at the end
+``/world/perception/detections``        rgbd mode: the planner API's objects after each perception
+                                        call (the latest shown), boxes labelled with name and
+                                        confidence, green right / orange wrong / red false
 ``/world/verdict``                      arrows from failing objects to where the task wants them and
                                         the target outlines (from the end of the episode on)
 ``/camera/<name>/rgb|depth``            camera images (``--log-images``)
 ``/text/<path>``                        texts as sent by agents (``llm/attempt1/planner/1/code``...);
-                                        ``/text/primitives`` and ``/text/planner/say`` are text logs
+                                        ``/text/primitives`` and ``/text/planner/say`` are text logs;
+                                        ``/text/perception`` one line of errors per perception call
 ``/attempts/<k>``                       static Markdown of LLM attempt k in reading order
 ``/summary``, ``/summary_json``         static episode summary (Markdown, JSON ``SUMMARY_SCHEMA``)
 """
@@ -32,9 +36,12 @@ OBJECTS = "/world/objects"
 ROBOT = "/world/robot"
 PRIMITIVES = "/world/primitives"
 VERDICT = "/world/verdict"
+PERCEPTION = "/world/perception"
+DETECTIONS = f"{PERCEPTION}/detections"
 CAMERA = "/camera"
 TEXT = "/text"
 PRIMITIVE_LOG = "/text/primitives"
+PERCEPTION_LOG = "/text/perception"
 ATTEMPTS = "/attempts"
 LOG_TEXTS = frozenset({"primitives", "planner/say"})
 """Text keys logged as ``TextLog`` lines (one entry per event) instead of documents."""
@@ -59,7 +66,8 @@ def attempt_entity(k: int) -> str:
 
 
 __all__ = [
-    "ATTEMPTS", "CAMERA", "LOG_TEXTS", "OBJECTS", "PRIMITIVES", "PRIMITIVE_LOG", "ROBOT", "STATIC_TEXTS",
+    "ATTEMPTS", "CAMERA", "DETECTIONS", "LOG_TEXTS", "OBJECTS", "PERCEPTION", "PERCEPTION_LOG", "PRIMITIVES",
+    "PRIMITIVE_LOG", "ROBOT", "STATIC_TEXTS",
     "SUMMARY_JSON_PATH", "SUMMARY_PATH", "SUMMARY_SCHEMA", "TEXT", "VERDICT", "WORLD", "attempt_entity",
     "object_entity", "text_entity",
 ]

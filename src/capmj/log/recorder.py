@@ -38,6 +38,8 @@ from capmj.sim.cameras import VIEW_CAMERAS
 from capmj.sim.pose import xyzw
 
 if TYPE_CHECKING:
+    from capmj.record import PerceivedBox
+    from capmj.records.perception import PerceptionCall
     from capmj.sim.objects import ObjectSpec
     from capmj.sim.world import World
 
@@ -112,6 +114,7 @@ class RerunRecorder:
         self.primitive_log: list[dict[str, Any]] = []
         self.text_counts: dict[str, int] = {}
         self.images_logged = 0
+        self.perception_views = 0
         self.summary: dict[str, Any] | None = None
         self._documents_written = False
         self._closed = False
@@ -253,6 +256,14 @@ class RerunRecorder:
         self.rec.log(image_entity(path, "depth"), self._rr.DepthImage(depth_mm(depth), meter=1000.0))
         self.images_logged += 1
 
+    def perception(self, time: float, call: "PerceptionCall", boxes: Sequence["PerceivedBox"]) -> None:
+        """A perception view (:class:`capmj.record.PerceptionViews`): :mod:`capmj.log.perception3d`."""
+        from capmj.log.perception3d import log_perception
+
+        self._stamp(self._clock.event(time))
+        log_perception(self._rr, self.rec, call, boxes)
+        self.perception_views += 1
+
     def _log_images(self, when: str) -> None:
         if self._cameras is not None and not self._cameras.log(self.image, self.depth) and not self._image_error:
             self._image_error = self._cameras.error
@@ -315,6 +326,8 @@ class RerunRecorder:
         s["primitive_log"] = self.primitive_log
         s["texts"] = dict(self.text_counts)
         s["images_logged"] = self.images_logged
+        if self.perception_views:
+            s["perception_views"] = self.perception_views
         if self._image_error:
             s["image_error"] = self._image_error
         s["bodies"] = sorted(self._bodies | self._static_bodies)

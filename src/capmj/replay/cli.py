@@ -57,6 +57,8 @@ def _fmt_summary(log: EpisodeLog) -> str:
         lines += ["  " + ln for ln in json.dumps(llm, indent=2, sort_keys=True).splitlines()]
     if log.attempts:
         lines.append("attempt documents: " + ", ".join(sorted(log.attempts)) + " (--texts prints them)")
+    if s.get("perception_views"):
+        lines.append(f"perception views: {s['perception_views']} (/world/perception/detections, /text/perception)")
     if s.get("images_logged"):
         lines.append(f"camera images: {s['images_logged']}")
     if s.get("image_error"):
