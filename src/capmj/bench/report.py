@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from capmj.atomic import atomic_write
+from capmj.bench.config import effective_args
 from capmj.bench.results import (
     CONFIG,
     EPISODES,
@@ -248,7 +249,10 @@ def summarize_dir(run_dir: str | Path) -> dict[str, Any]:
 
 
 def _options_suffix(cfg: Mapping[str, Any] | None) -> str:
-    opts = (cfg or {}).get("agent_options") or {}
+    """The label suffix of a folder's ``config.json``: the set options of :data:`LABEL_OPTIONS` the
+    latest part of the run ran with (``config.json`` keeps them under ``args.agent_options``, with
+    each resume's changes in ``resumes``: :func:`~capmj.bench.config.effective_args` applies them)."""
+    opts = effective_args(cfg or {}).get("agent_options") or {}
     parts = [f"{k}={opts[k]}" for k in LABEL_OPTIONS if opts.get(k) is not None]
     return f" ({', '.join(parts)})" if parts else ""
 
