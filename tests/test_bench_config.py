@@ -86,10 +86,15 @@ def test_option_names_are_defined_once() -> None:
     assert given_agent_options(args) == {"reporter": "vlm", "max_tokens": 99, "replan_retries": 2,
                                          "perception": "rgbd", "price": "1,2"}
     assert set(LABEL_OPTIONS) <= set(AGENT_OPTIONS)
-    from capmj.agents.llm_agent import LLMAgent
-    import inspect
+    from dataclasses import fields
 
-    assert set(AGENT_OPTIONS) <= set(inspect.signature(LLMAgent).parameters)  # every option reaches the agent
+    from capmj.agents.llm_options import CONFIG_FIELDS, LLM_AGENT_OPTIONS, LLMAgentOptions
+    from capmj.llm import LLMConfig
+
+    assert set(AGENT_OPTIONS) <= set(LLM_AGENT_OPTIONS)  # every option reaches the agent's configuration...
+    # ... as a field of one of its two records
+    assert set(CONFIG_FIELDS) <= {f.name for f in fields(LLMConfig)}
+    assert set(LLM_AGENT_OPTIONS) - set(CONFIG_FIELDS) == {f.name for f in fields(LLMAgentOptions)}
 
 
 def _llm_grid(server: StubLLMServer, out: Path, *extra: str) -> int:
