@@ -123,10 +123,13 @@ class Worker:
             task = get_task(job.task)
         except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
-        from capmj.runner import record_episode
+        from capmj.runner import record_episode, run_episode  # MuJoCo: loaded by the workers, not the parent
 
         try:
-            result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
+            if job.rrd is None:  # --no-log
+                result = run_episode(task, job.seed, agent)
+            else:
+                result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
         except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
         return sanitize(result.to_dict())
