@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from capmj.errors import ConfigError, LLMBudgetExceeded
+from capmj.llm.client import _import_litellm
 from capmj.records import Spend, SpendLimits
 
 __all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limit", "check_limits", "parse_price", "price_source"]
@@ -59,8 +60,6 @@ def price_source(model: str, declared: Price | None = None) -> str:
     if declared is not None:
         return "declared"
     try:
-        from capmj.llm.client import _import_litellm
-
         info = _import_litellm().get_model_info(model)
     except Exception:  # noqa: BLE001 - litellm raises for models it does not list
         return "unknown"

@@ -22,7 +22,9 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 from urllib.parse import urlsplit
 
+import capmj
 from capmj.agents.factory import agent_setting, has_setting
+from capmj.tasks import registry
 
 __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "package_versions", "run_manifest",
            "sha256_file"]
@@ -50,8 +52,6 @@ def package_versions() -> dict[str, str]:
 
 def git_state(start: str | Path | None = None) -> dict[str, Any] | None:
     """``{"revision", "dirty"}`` of the checkout capmj is imported from; None if not a checkout."""
-    import capmj
-
     root = Path(start) if start is not None else Path(capmj.__file__).resolve().parents[2]
     if not (root / ".git").exists():
         return None
@@ -176,8 +176,6 @@ def _short(v: Any) -> str:
 
 def run_manifest(agent: Any, task_names: Sequence[str], stored: Mapping[str, Any] | None) -> dict[str, Any]:
     """The manifest of a grid run; on a resume, warns (stderr) about what changed since."""
-    from capmj.tasks import registry
-
     manifest = build_manifest(agent, [registry.get_task(t) for t in task_names])
     if stored and stored.get("manifest"):
         for warning in differences({"stored run": stored["manifest"], "this resume": manifest}):

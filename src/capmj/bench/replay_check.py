@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
+from capmj.agents.factory import make_agent
 from capmj.bench.migrate import as_record
 from capmj.bench.config import effective_args
 from capmj.bench.results import CONFIG, EPISODES, load_json, read_records, sanitize
@@ -60,7 +61,6 @@ def compare(old: EpisodeRecord, new: EpisodeRecord, tol: float = TOL) -> list[st
 def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, tol: float = TOL,
                  progress: Any = None) -> dict[str, Any]:
     """Replay every episode of ``run_dir``; ``{"episodes", "passed", "http_calls", "mismatches"}``."""
-    from capmj.agents.factory import make_agent
     from capmj.runner import run_episode
     from capmj.tasks.registry import get_task
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable, Mapping, Sequence
 
 from capmj.agents.factory import agent_setting
+from capmj.agents.llm_meter import price_source
 from capmj.errors import ConfigError
 from capmj.records import Episode
 
@@ -78,8 +79,6 @@ class RunBudget:
         """ConfigError when a cost cap is asked for a model whose price is unknown."""
         if self.max_cost_usd is None:
             return
-        from capmj.agents.llm_meter import price_source
-
         model = getattr(agent, "model", None)
         if model is None:
             raise ConfigError("--max-cost-usd limits LLM spending; this agent makes no LLM calls")
