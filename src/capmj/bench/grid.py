@@ -45,6 +45,7 @@ from capmj.bench.failures import classify
 from capmj.bench.pool import START_METHOD, SpawnPool
 from capmj.bench.results import ResultsWriter
 from capmj.bench.rundir import RunDir
+from capmj.bench.transcripts import write_calls
 from capmj.bench.worker import AgentSpec, Job, Worker, init_pool_worker, run_pool_batch
 from capmj.errors import WorkerCrash, WorkerError, describe
 from capmj.llm import client
@@ -190,8 +191,6 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, execution: Execution
                      registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer``: LLM calls moved to the episode's transcript
     file, ``rrd`` made relative to the run folder, the failure classified."""
-    from capmj.bench.transcripts import write_calls
-
     run_dir = run_dir.resolved()
 
     def on_result(job: Job, result: EpisodeResult) -> None:

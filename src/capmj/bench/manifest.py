@@ -24,6 +24,7 @@ from urllib.parse import urlsplit
 
 import capmj
 from capmj.agents.factory import agent_setting, has_setting
+from capmj.agents.prompt_files import load_prompt, prompts_dir
 from capmj.tasks import registry
 
 __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "package_versions", "run_manifest",
@@ -110,8 +111,6 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
     prompts: dict[str, str] = {}
     stops: dict[str, list[str]] = {}
     if getattr(agent, "name", "") in ("llm", "reference"):
-        from capmj.agents.prompt_files import load_prompt, prompts_dir
-
         folder = Path(agent_setting(agent, "prompts_dir") or prompts_dir())
         prompts = _prompt_hashes(folder)
         stops = {p.stem: list(load_prompt(p.name, folder).stop) for p in sorted(folder.glob("*.py"))}

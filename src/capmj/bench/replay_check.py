@@ -26,6 +26,7 @@ from capmj.bench.config import effective_args
 from capmj.bench.results import CONFIG, EPISODES, load_json, read_records, sanitize
 from capmj.errors import CapmjError, ConfigError
 from capmj.records import EpisodeRecord, EpisodeResult
+from capmj.tasks.registry import get_task
 
 __all__ = ["compare", "main", "replay_check"]
 
@@ -62,7 +63,6 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
                  progress: Any = None) -> dict[str, Any]:
     """Replay every episode of ``run_dir``; ``{"episodes", "passed", "http_calls", "mismatches"}``."""
     from capmj.runner import run_episode
-    from capmj.tasks.registry import get_task
 
     run_dir = Path(run_dir)
     config = load_json(run_dir / CONFIG)

@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 
 from capmj.atomic import atomic_write
 from capmj.bench.config import effective_args
+from capmj.bench.manifest import differences
 from capmj.bench.results import (
     CONFIG,
     EPISODES,
@@ -39,6 +40,7 @@ from capmj.bench.sections import (
     perception_section,
     warnings_section,
 )
+from capmj.bench.stats import paired_comparison
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
@@ -292,9 +294,6 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[
 
 def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tuple[dict[str, Any], str]:
     """Summary and Markdown over one or several result folders; written to ``out_dir`` when given."""
-    from capmj.bench.manifest import differences
-    from capmj.bench.stats import paired_comparison
-
     records, labels, sources = load_folders(dirs)
     summary = summarize(records, label_of=lambda r: labels[id(r)])
     summary["sources"] = sources

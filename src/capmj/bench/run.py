@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 from capmj.agents.factory import make_agent
 from capmj.bench.config import BenchConfig, Given, config_json, stored_config
 from capmj.bench.grid import run_jobs_to_file
+from capmj.bench.manifest import run_manifest
 from capmj.bench.options import EXECUTION_OPTIONS, given_agent_options, given_values
 from capmj.bench.pool import stop_resource_tracker
 from capmj.bench.report import pct_cell, write_summary
@@ -125,8 +126,6 @@ def _stored(inv: Invocation) -> dict[str, Any] | None:
 def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | None) -> _Grid:
     """Seeds, tasks and agent checked (and an LLM grid confirmed) before the folder is touched;
     then the folder is created and proved writable."""
-    from capmj.bench.manifest import run_manifest
-
     if config.agent_options.get("attempts") is not None and config.agent_options["attempts"] < 1:
         raise ConfigError(f"--attempts must be >= 1, got {config.agent_options['attempts']}")
     seeds = parse_seeds(config.seeds)

@@ -115,9 +115,7 @@ class Worker:
         model = getattr(agent, "model", None)
         name = getattr(agent, "name", self.spec.name)
         try:
-            from capmj.tasks.registry import get_task
-
-            task = get_task(job.task)
+            task = registry.get_task(job.task)
         except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
         from capmj.runner import record_episode, run_episode  # MuJoCo: loaded by the workers, not the parent
