@@ -8,9 +8,10 @@ MuJoCo, and prints one JSON line per episode: the episode result without timings
 every request the agent sent (messages, temperatures, seeds, in order) and of the final physics
 state.  Keys that did not exist before issue #26's loop policies (``loop_policy``,
 ``reporter_prompt``, and per attempt ``rule``, ``confidence``, ``low_confidence``) are left out, so
-the same script runs on older code too:
+the lines of older code compare.  Each version runs its own copy of this script (the agent is
+built from ``LLMConfig`` + ``LLMAgentOptions`` since issue #28; before that, from 22 keywords):
 
-    PYTHONPATH=<old>/src:<old>/task_plugins python benchmarks/loop_digest.py > before.jsonl
+    git worktree add /tmp/old <old> && (cd /tmp/old && PYTHONPATH=src:task_plugins python benchmarks/loop_digest.py) > before.jsonl
     PYTHONPATH=src:task_plugins python benchmarks/loop_digest.py > after.jsonl
     diff before.jsonl after.jsonl        # identical lines: the same requests, states and records
 
@@ -33,6 +34,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from llm_stub_server import StubLLMServer, prompt_text  # noqa: E402
 
 from capmj.agents.llm_agent import LLMAgent  # noqa: E402
+from capmj.agents.llm_options import LLMAgentOptions  # noqa: E402
+from capmj.llm import LLMConfig  # noqa: E402
 from capmj.runner import run_episode  # noqa: E402
 from capmj.tasks.registry import get_task  # noqa: E402
 
@@ -108,7 +111,7 @@ def _plain(result: dict[str, Any]) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--loop-policy", default=None, help="LLMAgent(loop_policy=...); default: the agent's default")
+    ap.add_argument("--loop-policy", default=None, help="LLMAgentOptions(loop_policy=...); default: its default")
     args = ap.parse_args(argv)
     os.environ.pop("CAPMJ_LLM_CACHE", None)
     extra = {} if args.loop_policy is None else {"loop_policy": args.loop_policy}
@@ -117,9 +120,9 @@ def main(argv: list[str] | None = None) -> int:
             for seed in SEEDS:
                 server.reset()
                 server.respond_with(_responder(sc["plans"], sc["check"]))
-                agent = LLMAgent("openai/stub", api_base=server.base_url, reporter=sc["reporter"],
-                                 attempts=sc["attempts"], replan_retries=sc.get("replan_retries", 3),
-                                 backoff_s=0.0, timeout_s=10.0, **extra)
+                agent = LLMAgent(LLMConfig("openai/stub", api_base=server.base_url, backoff_s=0.0, timeout_s=10.0),
+                                 LLMAgentOptions(reporter=sc["reporter"], attempts=sc["attempts"],
+                                                 replan_retries=sc.get("replan_retries", 3), **extra))
                 cap = _Capture(agent)
                 res = _plain(run_episode(get_task(TASK), seed, cap).to_dict())
                 requests = json.dumps(server.requests, sort_keys=True)

@@ -40,12 +40,13 @@ def record_example(path: Path) -> Path:
     from llm_stub_server import StubLLMServer
 
     from capmj.agents.llm_agent import LLMAgent
+    from capmj.llm import LLMConfig
     from capmj.runner import record_episode
     from capmj.tasks.registry import get_task
 
     with StubLLMServer() as server:
         server.script(f"```python\n{PLAN}```")
-        agent = LLMAgent("openai/stub", api_base=server.base_url, api_key="sk-local", attempts=1)
+        agent = LLMAgent(LLMConfig("openai/stub", api_base=server.base_url, api_key="sk-local"))  # one attempt
         result = record_episode(get_task(TASK), SEED, agent, path)
     print(f"recorded {path}: success={result.success} error={result.error} diagnostics={list(result.diagnostics)}")
     return path

@@ -86,10 +86,15 @@ def test_option_names_are_defined_once() -> None:
     assert given_agent_options(args) == {"reporter": "vlm", "max_tokens": 99, "replan_retries": 2,
                                          "perception": "rgbd", "price": "1,2"}
     assert set(LABEL_OPTIONS) <= set(AGENT_OPTIONS)
-    from capmj.agents.llm_agent import LLMAgent
-    import inspect
+    from dataclasses import fields
 
-    assert set(AGENT_OPTIONS) <= set(inspect.signature(LLMAgent).parameters)  # every option reaches the agent
+    from capmj.agents.llm_options import CONFIG_FIELDS, LLM_AGENT_OPTIONS, LLMAgentOptions
+    from capmj.llm import LLMConfig
+
+    assert set(AGENT_OPTIONS) <= set(LLM_AGENT_OPTIONS)  # every option reaches the agent's configuration...
+    # ... as a field of one of its two records
+    assert set(CONFIG_FIELDS) <= {f.name for f in fields(LLMConfig)}
+    assert set(LLM_AGENT_OPTIONS) - set(CONFIG_FIELDS) == {f.name for f in fields(LLMAgentOptions)}
 
 
 def _llm_grid(server: StubLLMServer, out: Path, *extra: str) -> int:
@@ -134,3 +139,20 @@ def test_a_config_json_from_before_resumes_with_its_settings(tmp_path: Path, cap
     assert cfg["args"] == old["args"] and cfg["argv"] == old["argv"] and cfg["started_at"] == old["started_at"]
     assert cfg["resumes"][-1]["changed"] == {} and cfg["resumes"][-1]["argv"][-1] == "--no-progress"
     assert stored_config(cfg).agent_options == old["args"]["agent_options"]
+
+
+def test_the_report_of_a_run_folder_labels_it_with_its_agent_options(tmp_path: Path, capsys) -> None:
+    """The options are read from where config.json keeps them (``args.agent_options``, with each
+    resume's changes applied), not from the top level, where they never were."""
+    out = tmp_path / "run"
+    with StubLLMServer() as server:
+        server.respond_with(solver())
+        assert _llm_grid(server, out, "--seeds", "10001", "--workers", "0", "--attempts", "2") == 0
+        assert main(["--out", str(out), "--resume", "--temperature", "0.3", "--no-progress"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(out), "--out", str(tmp_path / "rep")]) == 0
+    md = capsys.readouterr().out
+    label = "llm openai/stub (reporter=none, attempts=2, temperature=0.3)"
+    header = next(line for line in md.splitlines() if line.startswith("| Task |"))
+    assert f"{label} (n=1)" in header, header
+    assert list(json.loads((tmp_path / "rep" / "summary.json").read_text())["overall"]) == [label]

@@ -272,24 +272,24 @@ def test_plans_not_rerun_and_extra_requests_are_counted() -> None:
 
 def test_loop_options_reach_the_agent_and_bad_ones_are_rejected() -> None:
     from capmj.agents.factory import make_agent
-    from capmj.agents.llm_agent import LLMAgent
+    from capmj.agents.llm_options import LLMAgentOptions
     from capmj.bench.cli import build_parser
     from capmj.errors import ConfigError
 
     args = build_parser().parse_args(["--agent", "llm", "--on-unknown", "stop", "--replan-temperature", "0.3"])
     a = make_agent("llm", model="m", on_unknown=args.on_unknown, replan_temperature=args.replan_temperature)
-    assert a.on_unknown == "stop" and a.replan_temperature == 0.3 and a.config.temperature == 0.0
-    assert LLMAgent("m").on_unknown == "replan" and LLMAgent("m").replan_temperature > 0
-    assert LLMAgent("m").replan_retries == 3
+    assert a.options.on_unknown == "stop" and a.options.replan_temperature == 0.3 and a.config.temperature == 0.0
+    default = LLMAgentOptions()
+    assert default.on_unknown == "replan" and default.replan_temperature > 0 and default.replan_retries == 3
     args = build_parser().parse_args(["--agent", "llm", "--replan-retries", "0"])
-    assert make_agent("llm", model="m", replan_retries=args.replan_retries).replan_retries == 0
+    assert make_agent("llm", model="m", replan_retries=args.replan_retries).options.replan_retries == 0
     for bad in (-1, 11, 1.5, True, "2"):
         with pytest.raises(ConfigError, match=r"replan_retries \(--replan-retries\) must be an integer from 0 to 10"):
-            LLMAgent("m", replan_retries=bad)
+            LLMAgentOptions(replan_retries=bad)
     with pytest.raises(ConfigError, match="replan, stop"):
-        LLMAgent("m", on_unknown="ignore")
+        make_agent("llm", model="m", on_unknown="ignore")
     with pytest.raises(ConfigError, match=">= 0"):
-        LLMAgent("m", replan_temperature=-1)
+        LLMAgentOptions(replan_temperature=-1)
     with pytest.raises(SystemExit):
         build_parser().parse_args(["--on-unknown", "success"])
 

@@ -19,6 +19,7 @@ from capmj.agents.footprints import Footprints
 from capmj.sim import footprint as F
 from capmj.sim.objects import BALL_RADIUS, BOWL_RADIUS, ObjectSpec
 from capmj.sim.pose import from_frame_2d, mat_yaw
+from capmj.sim.shapes import FIXTURE_WALLS
 from capmj.sim.world import World
 from capmj.tasks import predicates as P
 
@@ -66,8 +67,8 @@ def test_fixture_walls_are_the_geoms_the_file_compiles() -> None:
     world = _world()
     m = world.model
     geoms = np.flatnonzero(world.geom_obj == 3)
-    assert len(geoms) == len(F.FIXTURE_WALLS) == 2
-    for g, wall in zip(geoms, F.FIXTURE_WALLS):
+    assert len(geoms) == len(FIXTURE_WALLS) == 2
+    for g, wall in zip(geoms, FIXTURE_WALLS):
         np.testing.assert_allclose(m.geom_pos[g][:2], wall.centre[:2], atol=1e-12)
         np.testing.assert_allclose(m.geom_size[g], wall.half, atol=1e-12)
 

@@ -18,8 +18,10 @@ import numpy as np
 import pytest
 
 from capmj.agents.llm_agent import LLMAgent
+from capmj.agents.llm_options import LLMAgentOptions
 from capmj.agents.reporter import parse_verdict
 from capmj.agents.sandbox import SandboxBudget
+from capmj.llm import LLMConfig
 from capmj.runner import run_episode
 from capmj.tasks.registry import get_task
 from llm_stub_server import Reply, StubLLMServer, prompt_text
@@ -105,10 +107,10 @@ class Router:
         return handler(request) if callable(handler) else handler
 
 
-def agent(server: StubLLMServer, **kw: Any) -> LLMAgent:
-    kw.setdefault("backoff_s", 0.0)
-    kw.setdefault("timeout_s", 10.0)
-    return LLMAgent("openai/stub", api_base=server.base_url, **kw)
+def agent(server: StubLLMServer, *, llm: dict[str, Any] | None = None, **options: Any) -> LLMAgent:
+    """The agent against the stub server: ``llm`` sets fields of its LLMConfig, ``options`` of its LLMAgentOptions."""
+    config = LLMConfig("openai/stub", api_base=server.base_url, **{"backoff_s": 0.0, "timeout_s": 10.0, **(llm or {})})
+    return LLMAgent(config, LLMAgentOptions(**options))
 
 
 def a_transcript(a: LLMAgent) -> list[dict[str, Any]]:
@@ -306,7 +308,7 @@ def test_function_synthesis_depth_is_bounded(server: StubLLMServer) -> None:
 def test_provider_failure_is_retried_then_recorded(server: StubLLMServer, failure: str) -> None:
     bad = Reply.delayed(3.0, code(RIGHT_PLAN)) if failure == "timeout" else Reply.error(500, "boom")
     server.script(bad, bad, bad)
-    a = agent(server, attempts=3, max_retries=2, timeout_s=0.5 if failure == "timeout" else 10.0)
+    a = agent(server, attempts=3, llm={"max_retries": 2, "timeout_s": 0.5 if failure == "timeout" else 10.0})
     result = episode(a)
     assert not result.success
     assert result.error is not None and result.error.startswith("LLMError"), result.error
@@ -319,7 +321,7 @@ def test_provider_failure_is_retried_then_recorded(server: StubLLMServer, failur
 def test_provider_failure_inside_a_helper_lmp_ends_the_attempts(server: StubLLMServer) -> None:
     server.respond_with(Router(planner=code(RIGHT_PLAN), parse_function=parse_function_answer,
                                parse_obj_name=Reply.error(500, "down")))
-    result = episode(agent(server, attempts=3, max_retries=1))
+    result = episode(agent(server, attempts=3, llm={"max_retries": 1}))
     assert result.error is not None and result.error.startswith("LLMError")
     assert len(result.llm.attempts) == 1 and result.llm.attempts[0].error_kind == "llm"
 
@@ -329,13 +331,13 @@ def test_provider_failure_inside_a_helper_lmp_ends_the_attempts(server: StubLLMS
 # ------------------------------------------------------------------------------------------------
 def test_rerun_from_the_disk_cache_makes_no_http_calls(server: StubLLMServer, tmp_path: Path) -> None:
     server.respond_with(full_router())
-    first = episode(agent(server, reporter="text", attempts=2, cache_dir=tmp_path))
+    first = episode(agent(server, reporter="text", attempts=2, llm={"cache_dir": tmp_path}))
     # identical helper questions of attempt 2 are already answered from the cache
     assert first.success and first.llm.calls == 10 and first.llm.cached_calls == 3
     assert len(server.requests) == 7
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
-    again = episode(agent(server, reporter="text", attempts=2, cache_dir=tmp_path))
+    again = episode(agent(server, reporter="text", attempts=2, llm={"cache_dir": tmp_path}))
     assert len(server.requests) == 0
     assert again.llm.cached_calls == again.llm.calls == 10 and again.llm.cost_usd == 0
     same = ("success", "progress", "reward", "primitives", "attempts", "error", "sim_s", "diagnostics")
@@ -405,12 +407,23 @@ def test_agent_options_match_the_bench_factory() -> None:
     from capmj.agents.factory import make_agent
     from capmj.errors import ConfigError
 
-    a = make_agent("llm", model="gpt-4o-mini", api_base=None, reporter="vlm", attempts=2, temperature=0.0)
-    assert a.name == "llm" and a.model == "gpt-4o-mini" and a.attempts == 2 and a.reporter == "vlm"
-    with pytest.raises(ConfigError):
-        LLMAgent("gpt-4o-mini", reporter="audio")
-    with pytest.raises(ConfigError):
-        LLMAgent("gpt-4o-mini", attempts=0)
+    a = make_agent("llm", model="gpt-4o-mini", api_base=None, reporter="vlm", attempts=2, temperature=0)
+    assert a.name == "llm" and a.model == "gpt-4o-mini" and a.options.attempts == 2 and a.options.reporter == "vlm"
+    assert a.config == LLMConfig("gpt-4o-mini", temperature=0.0) and isinstance(a.config.temperature, float)
+    assert make_agent("llm").model == "gpt-4o-mini"  # the default model
+    with pytest.raises(ConfigError, match="unknown reporter 'audio'"):
+        make_agent("llm", model="gpt-4o-mini", reporter="audio")
+    with pytest.raises(ConfigError, match="attempts must be >= 1"):
+        LLMAgentOptions(attempts=0)
+    with pytest.raises(ConfigError, match="does not take option.*bogus"):
+        make_agent("llm", bogus=1)
+    with pytest.raises(ConfigError, match="max_tokens must be int"):
+        make_agent("llm", max_tokens="many")
+    with pytest.raises(ConfigError, match="LLMAgent takes an LLMConfig"):
+        LLMAgent("gpt-4o-mini")  # type: ignore[arg-type]  # the keyword form of before is refused clearly
+    with pytest.raises(ConfigError, match="episode_max_cost_usd needs a price"):
+        LLMAgent(LLMConfig("openai/no-such-model"), LLMAgentOptions(episode_max_cost_usd=1.0))
+    assert LLMAgentOptions(price="1,2").price is not None and LLMAgentOptions(attempts="2").attempts == 2
 
 
 # ------------------------------------------------------------------------------------------------

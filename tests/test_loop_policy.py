@@ -193,19 +193,19 @@ def test_careful_rules_fire_only_where_they_should() -> None:
 
 def test_bad_policies_are_refused_and_the_options_reach_the_agent() -> None:
     from capmj.agents.factory import make_agent
-    from capmj.agents.llm_agent import LLMAgent
+    from capmj.agents.llm_options import LLMAgentOptions
     from capmj.agents.loop_policy import LOOP_POLICIES
     from capmj.agents.reporter import REPORTER_PROMPTS
     from capmj.bench.cli import build_parser
 
     with pytest.raises(ConfigError, match="thesis, careful"):
-        LLMAgent("m", loop_policy="bold")
+        LLMAgentOptions(loop_policy="bold")
     with pytest.raises(ConfigError, match="needs --reporter text"):
-        LLMAgent("m", reporter="vlm", reporter_prompt="checked")
+        make_agent("llm", model="m", reporter="vlm", reporter_prompt="checked")
     args = build_parser().parse_args(["--agent", "llm", "--loop-policy", "careful", "--reporter-prompt", "checked"])
     a = make_agent("llm", model="m", reporter="text", loop_policy=args.loop_policy,
                    reporter_prompt=args.reporter_prompt)
-    assert (a.loop_policy, a.reporter_prompt) == ("careful", "checked")
-    assert LLMAgent("m").loop_policy == "thesis" and LLMAgent("m").reporter_prompt == "thesis"
+    assert (a.options.loop_policy, a.options.reporter_prompt) == ("careful", "checked")
+    assert (LLMAgentOptions().loop_policy, LLMAgentOptions().reporter_prompt) == ("thesis", "thesis")
     actions = {a.dest: a.choices for a in build_parser()._actions}
     assert tuple(actions["loop_policy"]) == LOOP_POLICIES and tuple(actions["reporter_prompt"]) == REPORTER_PROMPTS

@@ -55,7 +55,10 @@ def test_package_imports_no_simulator() -> None:
     code = ("import sys, pkgutil, importlib, capmj.perception as p\n"
             "for m in pkgutil.iter_modules(p.__path__): importlib.import_module('capmj.perception.' + m.name)\n"
             "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'mujoco' or m in "
-            "('capmj.sim.world', 'capmj.sim.cameras', 'capmj.sim.scene', 'capmj.tasks', 'capmj.agents'))\n"
+            "('capmj.sim.world', 'capmj.sim.cameras', 'capmj.sim.scene', 'capmj.tasks', 'capmj.agents', "
+            # object state and the footprint model (which reads specs and poses): the fixture's walls
+            # come from capmj.sim.shapes, constants only
+            "'capmj.sim.state', 'capmj.sim.footprint', 'capmj.sim.pose'))\n"
             "print(bad)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_subprocess_env(),
                          check=True, timeout=120)
@@ -123,11 +126,19 @@ def _file_walls() -> list:
     return [((float(g.pos[0]), float(g.pos[1])), float(g.size[0]), float(g.size[1])) for g in walls]
 
 
-def test_fixture_walls_of_the_perceiver_are_those_of_the_file() -> None:
-    from capmj.perception.footprint import FIXTURE_WALLS
+def test_fixture_geometry_of_the_perceiver_is_that_of_the_file() -> None:
+    """The perceiver reads the one definition of the walls (capmj.sim.shapes, shared with the
+    footprint model): they are the file's, and the L's enclosing rectangle and the corner-to-origin
+    offset the fit uses are those of those walls."""
+    from capmj.sim.shapes import FIXTURE_ORIGIN_IN, FIXTURE_RECT, FIXTURE_WALLS
 
-    for (c, hx, hy), (fc, fhx, fhy) in zip(FIXTURE_WALLS, _file_walls(), strict=True):
+    walls = [((w.centre[0], w.centre[1]), w.half[0], w.half[1]) for w in FIXTURE_WALLS]
+    for (c, hx, hy), (fc, fhx, fhy) in zip(walls, _file_walls(), strict=True):
         assert c == pytest.approx(fc, abs=1e-9) and (hx, hy) == pytest.approx((fhx, fhy), abs=1e-9)
+    lo = np.min([np.subtract(c, (hx, hy)) for c, hx, hy in walls], axis=0)  # the L's outer corner
+    hi = np.max([np.add(c, (hx, hy)) for c, hx, hy in walls], axis=0)
+    assert tuple(hi - lo) == pytest.approx(FIXTURE_RECT, abs=1e-12)
+    assert tuple(-lo) == pytest.approx((FIXTURE_ORIGIN_IN, FIXTURE_ORIGIN_IN), abs=1e-12)
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.8, 2.5, -2.0])

@@ -85,9 +85,10 @@ say(str(list({{n for n in names}})))
 WORKER = textwrap.dedent("""
     import json, sys
     from capmj.agents.llm_agent import LLMAgent
+    from capmj.llm import LLMConfig
     from capmj.runner import run_episode
     from capmj.tasks.registry import get_task
-    agent = LLMAgent("openai/stub", api_base=sys.argv[1], backoff_s=0.0, timeout_s=30.0)
+    agent = LLMAgent(LLMConfig("openai/stub", api_base=sys.argv[1], backoff_s=0.0, timeout_s=30.0))
     result = run_episode(get_task("stack-all-blocks-on-a-zone"), 10001, agent)
     print(json.dumps({"error": result.error, "said": list(result.llm.attempts[0].said),
                       "primitives": result.primitives, "progress": result.progress, "sim_s": result.sim_s}))
@@ -133,14 +134,14 @@ say(f'{{x:.9f}} {{y}} {{order}}')
 def test_np_random_replays_identically_from_the_cache(server: StubLLMServer, tmp_path: Path) -> None:
     plan_only(server, RANDOM_PLAN)
     rec1 = MemoryRecorder()
-    first = episode(agent(server, cache_dir=tmp_path), rec1)
+    first = episode(agent(server, llm={"cache_dir": tmp_path}), rec1)
     assert first.error is None and first.primitives == 1
     said = first.llm.attempts[0].said
     assert len(server.requests) == 1
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     rec2 = MemoryRecorder()
-    again = episode(agent(server, cache_dir=tmp_path, cache_only=True), rec2)
+    again = episode(agent(server, llm={"cache_dir": tmp_path, "cache_only": True}), rec2)
     assert len(server.requests) == 0 and again.llm.cached_calls == 1
     assert again.llm.attempts[0].said == said
     assert rec2.texts["llm/attempt1/api_calls"] == rec1.texts["llm/attempt1/api_calls"]
@@ -151,7 +152,7 @@ def test_cache_only_with_a_missing_entry_fails_the_episode_without_http(server: 
                                                                          tmp_path: Path) -> None:
     plan = "blocks = parse_obj_name('the blocks')\nsay(str(len(blocks)))"
     plan_only(server, plan, parse_obj_name=code(OBJ_NAMES))
-    first = episode(agent(server, cache_dir=tmp_path))
+    first = episode(agent(server, llm={"cache_dir": tmp_path}))
     assert first.error is None and first.llm.attempts[0].said == ("5",)
     entries = sorted(tmp_path.rglob("*.json"))
     assert len(entries) == 2
@@ -159,7 +160,7 @@ def test_cache_only_with_a_missing_entry_fails_the_episode_without_http(server: 
     helper.unlink()  # the parse_obj_name completion is gone
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
-    again = episode(agent(server, cache_dir=tmp_path, cache_only=True, attempts=2))
+    again = episode(agent(server, attempts=2, llm={"cache_dir": tmp_path, "cache_only": True}))
     assert len(server.requests) == 0
     assert again.error is not None and again.error.startswith("LLMError: cache-only: no cached completion "
                                                                "for parse_obj_name#1"), again.error

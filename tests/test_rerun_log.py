@@ -94,6 +94,24 @@ def failed(tmp_path_factory):
     return path, result, make_scene(task, SEED)
 
 
+def test_record_episode_always_logs_and_a_worker_runs_an_unlogged_job_with_run_episode(failed):
+    """record_episode has one contract (it logs to its path); an episode without a log is
+    run_episode, which the bench worker calls for a job without an rrd (--no-log)."""
+    from capmj.agents.oracle import OracleAgent
+    from capmj.bench.worker import AgentSpec, Job, Worker
+    from capmj.runner import run_episode
+
+    path, result, _ = failed
+    assert result.rrd == str(path) and path.stat().st_size > 0
+    with pytest.raises(TypeError, match="run_episode"):
+        record_episode(get_task(TASK), SEED, WrongBowlAgent(), None)  # type: ignore[arg-type]
+    unlogged = Worker(AgentSpec("oracle", {}, False)).run_job(Job(TASK, SEED))
+    direct = run_episode(get_task(TASK), SEED, OracleAgent()).to_dict()
+    assert unlogged["rrd"] is None and unlogged["success"]
+    assert {k: unlogged[k] for k in ("success", "progress", "primitives", "sim_s")} == {
+        k: direct[k] for k in ("success", "progress", "primitives", "sim_s")}
+
+
 def test_failed_episode_shows_the_verdict_in_3d(failed):
     path, result, scene = failed
     (b1, w1), (b2, _) = scene.info["pairs"][:2]

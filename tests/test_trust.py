@@ -41,7 +41,7 @@ def label_of(server: StubLLMServer, planner: Any, **kw: Any) -> tuple[str | None
     server.respond_with(Router(**handlers))
     kw.setdefault("backoff_s", 0.0)
     kw.setdefault("timeout_s", 10.0)
-    agent = LLMAgent("openai/stub", api_base=server.base_url, **kw)
+    agent = LLMAgent.from_options(model="openai/stub", api_base=server.base_url, **kw)  # the bench's flat options
     result = run_episode(get_task(TASK), SEED, agent)
     return classify(result), result.to_dict()
 

@@ -1,5 +1,5 @@
-"""Run one episode: (task, seed, agent) -> :class:`EpisodeResult`; :func:`record_episode` also logs
-it to an ``.rrd`` with :class:`capmj.log.recorder.RerunRecorder`.
+"""Run one episode: :func:`run_episode` (task, seed, agent) -> :class:`EpisodeResult`;
+:func:`record_episode` runs it and logs it to an ``.rrd`` with :class:`capmj.log.recorder.RerunRecorder`.
 
 The runner never raises for an episode's own failure: a task whose scene cannot be generated, a
 world that does not compile, an agent that raises or runs out of budget — each becomes a recorded,
@@ -111,16 +111,17 @@ def _oracle_goals(task: Any, seed: int) -> tuple:
         return ()
 
 
-def record_episode(task: Any, seed: int, agent: Any, path: str | Path | None, *, images: bool = False,
+def record_episode(task: Any, seed: int, agent: Any, path: str | Path, *, images: bool = False,
                    budget: Budget | None = None) -> EpisodeResult:
-    """Run one episode; when ``path`` is given, log it to that ``.rrd`` (summary included) and return
-    the result with ``rrd`` set to the path.  With ``path=None`` nothing is logged.
+    """Run one episode and log it to the ``.rrd`` at ``path`` (summary included); the result has
+    ``rrd`` set to the path.  An episode without a log is :func:`run_episode`: one function, one
+    contract (this one once did both, by whether ``path`` was None).
 
-    The bench workers run every episode through this.  It lives here, not in :mod:`capmj.log`, because
-    it runs the episode; the log package only records what it is sent.
+    It lives here, not in :mod:`capmj.log`, because it runs the episode; the log package only
+    records what it is sent.
     """
     if path is None:
-        return run_episode(task, seed, agent, budget=budget)
+        raise TypeError("record_episode logs to a path; run an episode without a log with run_episode")
     from capmj.log.recorder import RerunRecorder  # rerun is imported only when an episode is logged
 
     name = getattr(task, "name", str(task))

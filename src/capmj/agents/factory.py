@@ -11,7 +11,9 @@ user actually set.  An agent that does not accept an option the user set is a ``
 
 from __future__ import annotations
 
+import functools
 import importlib
+import importlib.util
 import inspect
 from typing import Any
 
@@ -20,9 +22,11 @@ from capmj.errors import ConfigError
 AGENTS: dict[str, str] = {
     "oracle": "capmj.agents.oracle:OracleAgent",
     "reference": "capmj.agents.reference:ReferenceAgent",
-    "llm": "capmj.agents.llm_agent:LLMAgent",
+    "llm": "capmj.agents.llm_agent:LLMAgent.from_options",
 }
-"""Agent name -> ``module:attribute`` of its class (or zero-or-more-keyword-argument factory)."""
+"""Agent name -> ``module:attribute`` of its class or of a factory taking keyword options
+(``attribute`` may be dotted: the LLM agent's flat options go through ``LLMAgent.from_options``,
+which builds its typed configuration and rejects unknown names itself)."""
 
 
 def agent_names() -> list[str]:
@@ -45,15 +49,13 @@ def _load(name: str) -> Any:
     except ImportError as exc:
         raise ConfigError(f"agent {name!r} could not be imported: {type(exc).__name__}: {exc}") from exc
     try:
-        return getattr(mod, attr)
+        return functools.reduce(getattr, attr.split("."), mod)
     except AttributeError:
         raise ConfigError(f"agent {name!r} is not available: {module} has no {attr!r}; "
                           f"valid agents: {', '.join(AGENTS)}") from None
 
 
 def _importable(path: str) -> bool:
-    import importlib.util
-
     module = path.partition(":")[0]
     try:
         return importlib.util.find_spec(module) is not None
@@ -84,4 +86,19 @@ def make_agent(name: str, **options: Any) -> Any:
         raise ConfigError(f"agent {name!r} rejected its options {sorted(opts)}: {exc}") from exc
 
 
-__all__ = ["AGENTS", "agent_names", "make_agent"]
+def agent_setting(agent: Any, name: str, default: Any = None) -> Any:
+    """One setting of a built agent, for records that describe any agent (the run manifest, the
+    price check): from its options record when it has one (the LLM agent's ``options``), else
+    from the attribute of that name (the reference agent's ``perception``, ``budget``)."""
+    options = getattr(agent, "options", None)
+    if options is not None and hasattr(options, name):
+        return getattr(options, name)
+    return getattr(agent, name, default)
+
+
+def has_setting(agent: Any, name: str) -> bool:
+    """Whether :func:`agent_setting` finds ``name`` on ``agent``."""
+    return hasattr(getattr(agent, "options", None), name) or hasattr(agent, name)
+
+
+__all__ = ["AGENTS", "agent_names", "agent_setting", "has_setting", "make_agent"]

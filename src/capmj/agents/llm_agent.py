@@ -34,128 +34,62 @@ attempts.  The last attempt's error is re-raised so that the runner records it i
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from functools import partial
-from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.confidence import assess
-from capmj.agents.llm_meter import LLMMeter, check_limits, parse_price
+from capmj.agents.llm_meter import LLMMeter, check_limits
+from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
-from capmj.agents.loop_policy import Outcome, check_policy, decide, judges_errors, wrong_share
+from capmj.agents.loop_policy import Outcome, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
 from capmj.agents.plan_check import plan_check
-from capmj.agents.planner import DEFAULT_PLAN_BUDGET, Feedback, PlanOutcome, plan_and_run, replan_sampling
-from capmj.agents.reporter import REPORTER_PROMPTS, REPORTERS, Report, make_reporter
-from capmj.agents.sandbox import SandboxBudget
+from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
+from capmj.agents.reporter import Report, make_reporter
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
-from capmj.llm.client import DEFAULT_TIMEOUT_S
 from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
 from capmj.tasks.protocol import episode_rng
 
-__all__ = ["ATTEMPT_FIELDS", "CACHE_ENV", "DEFAULT_LMP_BUDGET", "DEFAULT_REPLAN_RETRIES", "DEFAULT_REPLAN_TEMPERATURE",
-           "LLMAgent", "MAX_REPLAN_RETRIES", "ON_UNKNOWN"]
-
-ON_UNKNOWN = ("replan", "stop")
-"""What an unknown reporter verdict does: re-plan like a False verdict (default), or stop."""
-
-DEFAULT_REPLAN_TEMPERATURE = 0.7
-"""Sampling temperature of the first planner request of attempts 2, 3, ... (at 0 a small model
-repeated its failed plan byte for byte); retries after an identical answer go hotter
-(:func:`capmj.agents.planner.replan_sampling`)."""
-
-DEFAULT_REPLAN_RETRIES = 3
-"""Requests after a re-plan answer identical to an earlier attempt's plan, before that plan is
-recorded as not re-run (the temperatures and seeds are :func:`capmj.agents.planner.replan_sampling`)."""
-MAX_REPLAN_RETRIES = 10
-"""Upper bound of ``replan_retries``: each retry is a full planner request."""
-
-CACHE_ENV = "CAPMJ_LLM_CACHE"
-"""Default cache folder for LLM completions when ``cache_dir`` is not given."""
+__all__ = ["ATTEMPT_FIELDS", "LLMAgent"]
 
 STOPPED = {"achieved": "reporter: achieved", "finished": "plan finished", "unknown_stop": "reporter: unknown",
            "achieved_after_error": "reporter: achieved after an error", "low_confidence_stop": "reporter: low confidence"}
 """``LLMNotes.stopped`` of the rules that stop the loop (besides LLM errors, budgets, attempts used up)."""
 
-DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
-"""Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
-
-
-def _at_least(name: str, value: Any, convert: Callable[[Any], Any], kind: str, minimum: float) -> Any:
-    """``convert(value)``, or a ConfigError naming ``name`` when it is not ``kind`` or below ``minimum``."""
-    try:
-        out = convert(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be {kind} >= {minimum}, got {value!r}") from None
-    if not out >= minimum:  # also rejects NaN
-        raise ConfigError(f"{name} must be >= {minimum}, got {out}")
-    return out
-
 
 class LLMAgent:
     """Plans with an LLM through the planner API; optional reporter and re-planning.
 
-    ``model`` is any litellm model string (``gpt-4o-mini``, ``ollama/qwen2.5-coder``,
-    ``openai/<alias>`` with ``api_base`` for OpenAI-compatible local servers).
+    ``config`` says what to ask (``config.model`` is any litellm model string: ``gpt-4o-mini``,
+    ``ollama/qwen2.5-coder``, ``openai/<alias>`` with ``api_base`` for OpenAI-compatible local
+    servers) and is used as given; ``options`` how the loop runs (:mod:`capmj.agents.llm_options`).
+    :meth:`from_options` builds both from flat keyword options, as the bench does.
     """
 
     name = "llm"
 
-    def __init__(self, model: str = "gpt-4o-mini", api_base: str | None = None, reporter: str = "none",
-                 attempts: int = 1, temperature: float = 0.0, timeout_s: float = DEFAULT_TIMEOUT_S,
-                 cache_dir: str | Path | None = None, max_tokens: int = 2048, *, cache_only: bool = False,
-                 api_key: str | None = None, max_retries: int = 3, backoff_s: float = 1.0,
-                 plan_budget: SandboxBudget | None = None, lmp_budget: SandboxBudget | None = None,
-                 max_fn_depth: int = 3, prompts_dir: str | Path | None = None, on_unknown: str = "replan",
-                 replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE,
-                 replan_retries: int = DEFAULT_REPLAN_RETRIES,
-                 episode_max_tokens: int | None = None, episode_max_cost_usd: float | None = None,
-                 price: str | None = None, perception: str = "state", loop_policy: str = "thesis",
-                 reporter_prompt: str = "thesis") -> None:
-        self.perception = perception  # the planner API's source: capmj.perception.plugins.perception_modes()
-        self.loop_policy = check_policy(loop_policy)  # capmj.agents.loop_policy.LOOP_POLICIES
-        if reporter_prompt not in REPORTER_PROMPTS:
-            raise ConfigError(f"unknown reporter prompt {reporter_prompt!r}; valid: {', '.join(REPORTER_PROMPTS)}")
-        if reporter_prompt != "thesis" and reporter == "vlm":
-            raise ConfigError(f"reporter prompt {reporter_prompt!r} is a text-reporter prompt; it needs --reporter text")
-        self.reporter_prompt = reporter_prompt
-        if on_unknown not in ON_UNKNOWN:
-            raise ConfigError(f"unknown on_unknown policy {on_unknown!r}; valid: {', '.join(ON_UNKNOWN)}")
-        replan_temperature = _at_least("replan_temperature", replan_temperature, float, "a number", 0)
-        if isinstance(replan_retries, bool) or not isinstance(replan_retries, int) or not (
-                0 <= replan_retries <= MAX_REPLAN_RETRIES):
-            raise ConfigError(f"replan_retries (--replan-retries) must be an integer from 0 to {MAX_REPLAN_RETRIES} "
-                              f"(0: never ask again after an identical re-plan), got {replan_retries!r}")
-        if reporter not in REPORTERS:
-            raise ConfigError(f"unknown reporter {reporter!r}; valid reporters: {', '.join(REPORTERS)}")
-        attempts = _at_least("attempts", attempts, int, "an integer", 1)
-        if max_fn_depth < 0:
-            raise ConfigError(f"max_fn_depth must be >= 0, got {max_fn_depth}")
-        if cache_dir is None and os.environ.get(CACHE_ENV, "").strip():
-            cache_dir = os.environ[CACHE_ENV].strip()
-        self.config = LLMConfig(model=model, api_base=api_base, api_key=api_key, temperature=float(temperature),
-                                max_tokens=int(max_tokens), timeout_s=float(timeout_s), max_retries=int(max_retries),
-                                backoff_s=float(backoff_s), cache_dir=Path(cache_dir) if cache_dir else None,
-                                cache_only=bool(cache_only))
-        self.price = parse_price(price)
-        tokens, cost = check_limits(model, max_tokens=episode_max_tokens, max_cost_usd=episode_max_cost_usd,
-                                    price=self.price)
-        self.episode_max_tokens, self.episode_max_cost_usd = tokens, cost  # validated, for each episode's meter
-        self.reporter = reporter
-        self.attempts = attempts
-        self.on_unknown = on_unknown
-        self.replan_temperature = replan_temperature
-        self.replan_retries = replan_retries
-        self.plan_budget = plan_budget or DEFAULT_PLAN_BUDGET
-        self.lmp_budget = lmp_budget or DEFAULT_LMP_BUDGET
-        self.max_fn_depth = int(max_fn_depth)
-        self.prompts_dir = Path(prompts_dir) if prompts_dir is not None else None
+    def __init__(self, config: LLMConfig, options: LLMAgentOptions | None = None) -> None:
+        if not isinstance(config, LLMConfig) or not isinstance(options, (LLMAgentOptions, type(None))):
+            raise ConfigError("LLMAgent takes an LLMConfig and LLMAgentOptions (flat keyword options: "
+                              "LLMAgent.from_options)")
+        self.config = config
+        self.options = options if options is not None else LLMAgentOptions()
+        o = self.options
+        # a cost cap needs the price of *this* model (declared or in litellm's list)
+        check_limits(config.model, max_tokens=o.episode_max_tokens, max_cost_usd=o.episode_max_cost_usd,
+                     price=o.price)
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
+
+    @classmethod
+    def from_options(cls, **options: Any) -> "LLMAgent":
+        """The agent of flat keyword options (the bench's ``agent_options``; ``None`` = not given):
+        :func:`~capmj.agents.llm_options.llm_agent_configs` splits them into the two records."""
+        return cls(*llm_agent_configs(options))
 
     @property
     def model(self) -> str:
@@ -167,8 +101,9 @@ class LLMAgent:
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         client = self.client = self._client()
-        meter = self.meter = LLMMeter(self.model, price=self.price, max_tokens=self.episode_max_tokens,
-                                      max_cost_usd=self.episode_max_cost_usd)
+        o = self.options
+        meter = self.meter = LLMMeter(self.model, price=o.price, max_tokens=o.episode_max_tokens,
+                                      max_cost_usd=o.episode_max_cost_usd)
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
@@ -177,7 +112,7 @@ class LLMAgent:
         ctx.notes["llm"] = self._notes(client, attempts)
         ctx.notes["llm_transcript"] = transcript
         goal = ctx.scene.goal
-        reporter = make_reporter(self.reporter, self.prompts_dir, self.reporter_prompt)
+        reporter = make_reporter(o.reporter, o.prompts_dir, o.reporter_prompt)
         feedback: Feedback | None = None  # of the last attempt whose plan ran
         feedbacks: list[Feedback] = []
         plans: list[str | None] = []  # plan_key of each attempt's plan (None: no answer)
@@ -189,7 +124,7 @@ class LLMAgent:
         try:
             if reporter is not None:
                 reporter.start(ctx)
-            for k in range(1, self.attempts + 1):
+            for k in range(1, o.attempts + 1):
                 if k > 1:
                     ctx.reset() if reset else ctx.next_attempt()
                 from_initial = k == 1 or reset
@@ -205,20 +140,20 @@ class LLMAgent:
                     # that plan, run again from the same initial state, would end where it ended
                     checkpoint, error = ends[outcome.identical_to]
                     ctx.restore(checkpoint)
-                elif self.attempts > 1 and not isinstance(error, LLMError) and from_initial:
+                elif o.attempts > 1 and not isinstance(error, LLMError) and from_initial:
                     ends[k] = (ctx.checkpoint(), error)
                 last_error = error
                 checked = assess(report, ctx.world.objects) if report is not None else None
-                decision = decide(self.loop_policy, Outcome(
+                decision = decide(o.loop_policy, Outcome(
                     not_run=outcome.not_run is not None, error=error is not None,
                     verdict=report.verdict if report is not None else None, judged=report is not None,
                     assessment=checked, wrong_share=wrong_share(checked, movable)),
-                    on_unknown=self.on_unknown, reset=from_initial)
+                    on_unknown=o.on_unknown, reset=from_initial)
                 rule = decision.rule
                 unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
                 if meter.exceeded is not None or isinstance(error, LLMError):
                     rule = "llm_budget" if meter.exceeded is not None else "llm_error"
-                record = replace(record, on_unknown=self.on_unknown if unknown else None, rule=rule,
+                record = replace(record, on_unknown=o.on_unknown if unknown else None, rule=rule,
                                  confidence=checked.confidence if checked is not None else None,
                                  low_confidence=checked.why if checked is not None else None)
                 attempts.append(record)
@@ -235,7 +170,7 @@ class LLMAgent:
                     if rule == "achieved_after_error":
                         last_error = None  # the loop ends on the reporter's "achieved"; the error is in the record
                     break
-                if k == self.attempts:
+                if k == o.attempts:
                     stopped = "attempts used up"
                     break
                 reset = decision.reset
@@ -258,11 +193,12 @@ class LLMAgent:
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
                  reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback],
                  *, reset: bool) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
-        api = make_api(ctx, self.perception)
+        o = self.options
+        api = make_api(ctx, o.perception)
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
-                             attempt=k, recorder=ctx.recorder, transcript=transcript, directory=self.prompts_dir,
-                             lmp_budget=self.lmp_budget, max_fn_depth=self.max_fn_depth,
+                             attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
+                             lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
         session.check = plan_check(session, ctx)  # a plan's own parse_completion (CapRavens' plans check and retry)
         before = len(client.records)
@@ -271,10 +207,10 @@ class LLMAgent:
         report: Report | None = None
         predicate: tuple[bool | None, float | None] = (None, None)
         # re-plans: planner requests sample at replan_sampling (attempt 1 and helpers at the client's temperature)
-        sampling = partial(replan_sampling, self.replan_temperature, ctx.seed, k) if k > 1 else None
+        sampling = partial(replan_sampling, o.replan_temperature, ctx.seed, k) if k > 1 else None
         try:
-            plan_and_run(session, goal, feedback=feedback, previous=plans, budget=self.plan_budget, outcome=outcome,
-                         retries=self.replan_retries, sampling=sampling, earlier=feedbacks)
+            plan_and_run(session, goal, feedback=feedback, previous=plans, budget=o.plan_budget, outcome=outcome,
+                         retries=o.replan_retries, sampling=sampling, earlier=feedbacks)
         except Exception as exc:  # noqa: BLE001 - every failure ends this attempt, recorded
             llm_error = find_llm_error(exc)
             error = llm_error if llm_error is not None else exc
@@ -282,7 +218,7 @@ class LLMAgent:
             try:
                 ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
                 # careful: a plan that raised after acting is judged on the state it reached (rule a)
-                acted = error is not None and ctx.attempt_primitives > 0 and judges_errors(self.loop_policy)
+                acted = error is not None and ctx.attempt_primitives > 0 and judges_errors(o.loop_policy)
                 if reporter is not None and (error is None or acted):
                     report = reporter.judge(session, ctx, goal)
             except Exception as exc:  # noqa: BLE001
@@ -375,10 +311,11 @@ class LLMAgent:
                spend: Spend | None = None) -> LLMNotes:
         """The episode's notes so far: options, the client's usage, the attempts, why it stopped."""
         u = client.usage()
-        return LLMNotes(model=self.model, reporter=self.reporter, max_attempts=self.attempts,
-                        on_unknown=self.on_unknown, loop_policy=self.loop_policy, reporter_prompt=self.reporter_prompt, temperature=self.config.temperature,
-                        replan_temperature=self.replan_temperature, replan_retries=self.replan_retries,
-                        attempts=tuple(attempts), calls=u.calls, cached_calls=u.cached_calls,
-                        failed_calls=u.failed_calls, prompt_tokens=u.prompt_tokens,
+        o = self.options
+        return LLMNotes(model=self.model, reporter=o.reporter, max_attempts=o.attempts, on_unknown=o.on_unknown,
+                        loop_policy=o.loop_policy, reporter_prompt=o.reporter_prompt,
+                        temperature=self.config.temperature, replan_temperature=o.replan_temperature,
+                        replan_retries=o.replan_retries, attempts=tuple(attempts), calls=u.calls,
+                        cached_calls=u.cached_calls, failed_calls=u.failed_calls, prompt_tokens=u.prompt_tokens,
                         completion_tokens=u.completion_tokens, cost_usd=round(u.cost_usd, 8),
                         latency_s=round(u.latency_s, 3), stopped=stopped, spend=spend)

@@ -24,9 +24,10 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from capmj.errors import ConfigError, LLMBudgetExceeded
+from capmj.llm.client import _import_litellm
 from capmj.records import Spend, SpendLimits
 
-__all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limits", "parse_price", "price_source"]
+__all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limit", "check_limits", "parse_price", "price_source"]
 
 
 @dataclass(frozen=True)
@@ -59,8 +60,6 @@ def price_source(model: str, declared: Price | None = None) -> str:
     if declared is not None:
         return "declared"
     try:
-        from capmj.llm.client import _import_litellm
-
         info = _import_litellm().get_model_info(model)
     except Exception:  # noqa: BLE001 - litellm raises for models it does not list
         return "unknown"
@@ -68,7 +67,8 @@ def price_source(model: str, declared: Price | None = None) -> str:
     return "litellm" if known else "unknown"
 
 
-def _check_limit(value: Any, name: str, kind: type) -> Any:
+def check_limit(value: Any, name: str, kind: type) -> Any:
+    """``kind(value)`` when it is a positive finite number (None stays None), else ConfigError naming ``name``."""
     if value is None:
         return None
     try:
@@ -83,8 +83,8 @@ def _check_limit(value: Any, name: str, kind: type) -> Any:
 def check_limits(model: str, *, max_tokens: Any = None, max_cost_usd: Any = None,
                  price: Price | None = None) -> tuple[int | None, float | None]:
     """The episode limits, validated: positive numbers, and a cost cap only with a known price."""
-    tokens = _check_limit(max_tokens, "episode_max_tokens", int)
-    cost = _check_limit(max_cost_usd, "episode_max_cost_usd", float)
+    tokens = check_limit(max_tokens, "episode_max_tokens", int)
+    cost = check_limit(max_cost_usd, "episode_max_cost_usd", float)
     if cost is not None and price_source(model, price) == "unknown":
         raise ConfigError(f"episode_max_cost_usd needs a price, but the price of {model!r} is unknown; "
                           "declare one (price 'IN,OUT' in USD per million tokens) or cap tokens instead")

@@ -32,6 +32,7 @@ import ast
 import math
 from dataclasses import dataclass
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -331,8 +332,6 @@ class VLMReporter:
 
     # -- judging ---------------------------------------------------------------------------
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
-        from pathlib import Path
-
         from capmj.llm import image_part, text_part
 
         call = session.next_call("vlm_reporter", goal)

@@ -17,9 +17,11 @@ from typing import NoReturn, Sequence
 
 from capmj.bench.config import DEFAULT_TASKS
 from capmj.bench.options import PERCEPTION, add_agent_flags, budget_flags, execution_flags
+from capmj.bench.report import report
 from capmj.bench.run import CONFIRM_LLM_EPISODES, EXIT_BUDGET, one_line, prepare_out, run_grid
 from capmj.bench.seeds import TEST_SEEDS, parse_seeds
 from capmj.errors import CapmjError, ConfigError
+from capmj.tasks import registry
 
 EPILOG = """\
 examples:
@@ -94,8 +96,6 @@ def build_report_parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------------- commands
 def _list_tasks() -> int:
-    from capmj.tasks import registry
-
     infos = registry.list_tasks()
     bad = registry.broken(load=True)
     rows = []
@@ -125,8 +125,6 @@ def _list_tasks() -> int:
 
 
 def report_main(argv: Sequence[str]) -> int:
-    from capmj.bench.report import report
-
     args = build_report_parser().parse_args(list(argv))
     out = args.out if args.out is not None else (args.dirs[0] if len(args.dirs) == 1 else None)
     try:

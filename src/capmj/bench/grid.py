@@ -41,11 +41,14 @@ from capmj.bench.executor import (
     crash_error,
     describe_exit_codes,
 )
+from capmj.bench.failures import classify
 from capmj.bench.pool import START_METHOD, SpawnPool
 from capmj.bench.results import ResultsWriter
 from capmj.bench.rundir import RunDir
+from capmj.bench.transcripts import write_calls
 from capmj.bench.worker import AgentSpec, Job, Worker, init_pool_worker, run_pool_batch
 from capmj.errors import WorkerCrash, WorkerError, describe
+from capmj.llm import client
 from capmj.records import EpisodeRecord, EpisodeResult
 
 RECYCLE_LOGGING_WORKERS = 200
@@ -104,8 +107,6 @@ class LocalExecutor(RecordSink):
 
     def _run_here(self, jobs: list[Job]) -> None:
         """``workers=0``: run in this process (debugging, tests); the LLM gate is restored after."""
-        from capmj.llm import client
-
         gate = threading.BoundedSemaphore(self.max_llm_concurrency) if self.max_llm_concurrency else None
         previous = client.request_gate()
         worker = Worker(self.agent, self.registered, gate)
@@ -190,9 +191,6 @@ def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, execution: Execution
                      registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer``: LLM calls moved to the episode's transcript
     file, ``rrd`` made relative to the run folder, the failure classified."""
-    from capmj.bench.failures import classify
-    from capmj.bench.transcripts import write_calls
-
     run_dir = run_dir.resolved()
 
     def on_result(job: Job, result: EpisodeResult) -> None:

@@ -22,6 +22,11 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 from urllib.parse import urlsplit
 
+import capmj
+from capmj.agents.factory import agent_setting, has_setting
+from capmj.agents.prompt_files import load_prompt, prompts_dir
+from capmj.tasks import registry
+
 __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "package_versions", "run_manifest",
            "sha256_file"]
 
@@ -48,8 +53,6 @@ def package_versions() -> dict[str, str]:
 
 def git_state(start: str | Path | None = None) -> dict[str, Any] | None:
     """``{"revision", "dirty"}`` of the checkout capmj is imported from; None if not a checkout."""
-    import capmj
-
     root = Path(start) if start is not None else Path(capmj.__file__).resolve().parents[2]
     if not (root / ".git").exists():
         return None
@@ -108,19 +111,17 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
     prompts: dict[str, str] = {}
     stops: dict[str, list[str]] = {}
     if getattr(agent, "name", "") in ("llm", "reference"):
-        from capmj.agents.prompt_files import load_prompt, prompts_dir
-
-        folder = Path(getattr(agent, "prompts_dir", None) or prompts_dir())
+        folder = Path(agent_setting(agent, "prompts_dir") or prompts_dir())
         prompts = _prompt_hashes(folder)
         stops = {p.stem: list(load_prompt(p.name, folder).stop) for p in sorted(folder.glob("*.py"))}
-    budgets: dict[str, Any] = {"episode": _asdict(getattr(agent, "budget", None) or Budget())}
+    budgets: dict[str, Any] = {"episode": _asdict(agent_setting(agent, "budget") or Budget())}
     for name in ("plan_budget", "lmp_budget", "limits"):
-        if hasattr(agent, name):
-            budgets[name] = _asdict(getattr(agent, name))
+        if has_setting(agent, name):
+            budgets[name] = _asdict(agent_setting(agent, name))
     if cfg is not None:
         budgets["llm"] = {"timeout_s": cfg.timeout_s, "max_retries": cfg.max_retries, "max_tokens": cfg.max_tokens,
                           "temperature": cfg.temperature, "stream": cfg.stream, "stop": stops}
-    price = getattr(agent, "price", None)
+    price = agent_setting(agent, "price")
     return {
         "git": git_state(),
         "packages": package_versions(),
@@ -128,7 +129,7 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "task_modules": _task_module_hashes(task_objects),
         "model": model,
         "api_host": f"{host}:{port}" if host and port else host,
-        "perception": getattr(agent, "perception", None) or "state",  # the oracle reads the truth
+        "perception": agent_setting(agent, "perception") or "state",  # the oracle reads the truth
         "budgets": budgets,
         "price": _asdict(price),
         "cache_dir": str(cfg.cache_dir) if cfg is not None and cfg.cache_dir is not None else None,
@@ -174,8 +175,6 @@ def _short(v: Any) -> str:
 
 def run_manifest(agent: Any, task_names: Sequence[str], stored: Mapping[str, Any] | None) -> dict[str, Any]:
     """The manifest of a grid run; on a resume, warns (stderr) about what changed since."""
-    from capmj.tasks import registry
-
     manifest = build_manifest(agent, [registry.get_task(t) for t in task_names])
     if stored and stored.get("manifest"):
         for warning in differences({"stored run": stored["manifest"], "this resume": manifest}):

@@ -13,6 +13,7 @@ starts its workers through its context), so no private attribute of the executor
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import resource_tracker
 from multiprocessing.context import SpawnContext, SpawnProcess
 from typing import Any, Callable
 
@@ -78,8 +79,6 @@ def stop_resource_tracker() -> None:
     cleanly, unlinking what it tracks), so this is the one private attribute the bench reads; it
     is looked up defensively and does nothing where it is missing.
     """
-    from multiprocessing import resource_tracker
-
     stop = getattr(getattr(resource_tracker, "_resource_tracker", None), "_stop", None)
     if stop is None:
         return

@@ -20,11 +20,13 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
+from capmj.agents.factory import make_agent
 from capmj.bench.migrate import as_record
 from capmj.bench.config import effective_args
 from capmj.bench.results import CONFIG, EPISODES, load_json, read_records, sanitize
 from capmj.errors import CapmjError, ConfigError
 from capmj.records import EpisodeRecord, EpisodeResult
+from capmj.tasks.registry import get_task
 
 __all__ = ["compare", "main", "replay_check"]
 
@@ -60,9 +62,7 @@ def compare(old: EpisodeRecord, new: EpisodeRecord, tol: float = TOL) -> list[st
 def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, tol: float = TOL,
                  progress: Any = None) -> dict[str, Any]:
     """Replay every episode of ``run_dir``; ``{"episodes", "passed", "http_calls", "mismatches"}``."""
-    from capmj.agents.factory import make_agent
     from capmj.runner import run_episode
-    from capmj.tasks.registry import get_task
 
     run_dir = Path(run_dir)
     config = load_json(run_dir / CONFIG)

@@ -16,6 +16,8 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from capmj.atomic import atomic_write
+from capmj.bench.config import effective_args
+from capmj.bench.manifest import differences
 from capmj.bench.results import (
     CONFIG,
     EPISODES,
@@ -38,6 +40,7 @@ from capmj.bench.sections import (
     perception_section,
     warnings_section,
 )
+from capmj.bench.stats import paired_comparison
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
@@ -248,7 +251,10 @@ def summarize_dir(run_dir: str | Path) -> dict[str, Any]:
 
 
 def _options_suffix(cfg: Mapping[str, Any] | None) -> str:
-    opts = (cfg or {}).get("agent_options") or {}
+    """The label suffix of a folder's ``config.json``: the set options of :data:`LABEL_OPTIONS` the
+    latest part of the run ran with (``config.json`` keeps them under ``args.agent_options``, with
+    each resume's changes in ``resumes``: :func:`~capmj.bench.config.effective_args` applies them)."""
+    opts = effective_args(cfg or {}).get("agent_options") or {}
     parts = [f"{k}={opts[k]}" for k in LABEL_OPTIONS if opts.get(k) is not None]
     return f" ({', '.join(parts)})" if parts else ""
 
@@ -288,9 +294,6 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[
 
 def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tuple[dict[str, Any], str]:
     """Summary and Markdown over one or several result folders; written to ``out_dir`` when given."""
-    from capmj.bench.manifest import differences
-    from capmj.bench.stats import paired_comparison
-
     records, labels, sources = load_folders(dirs)
     summary = summarize(records, label_of=lambda r: labels[id(r)])
     summary["sources"] = sources

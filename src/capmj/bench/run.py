@@ -19,16 +19,23 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 
+from capmj.agents.factory import make_agent
 from capmj.bench.config import BenchConfig, Given, config_json, stored_config
+from capmj.bench.grid import run_jobs_to_file
+from capmj.bench.manifest import run_manifest
 from capmj.bench.options import EXECUTION_OPTIONS, given_agent_options, given_values
-from capmj.bench.rundir import RunDir
+from capmj.bench.pool import stop_resource_tracker
+from capmj.bench.report import pct_cell, write_summary
+from capmj.bench.results import ResultsWriter, load_json, read_records, summarize, write_result_json
+from capmj.bench.rundir import EPISODES, RunDir
 from capmj.bench.seeds import TEST_SEEDS, parse_seeds
+from capmj.bench.spend import BudgetTracker
+from capmj.bench.worker import Job
 from capmj.errors import CapmjError, ConfigError
+from capmj.tasks import registry
 
-if TYPE_CHECKING:  # the grid's modules load when a grid runs: importing the CLI stays light
+if TYPE_CHECKING:  # names of annotations only
     from capmj.bench.executor import GridStats
-    from capmj.bench.spend import BudgetTracker
-    from capmj.bench.worker import Job
     from capmj.records import EpisodeRecord
 
 CONFIRM_LLM_EPISODES = 100
@@ -92,8 +99,6 @@ def run_grid(args: argparse.Namespace, argv: Sequence[str]) -> int:
     stored = _stored(inv)
     config = BenchConfig.resolve(given, stored_config(stored) if stored is not None else None)
     grid = _validate(inv, config, stored)
-    from capmj.bench.results import write_result_json
-
     write_result_json(inv.run_dir.config, config_json(config, inv.argv, grid.facts(), stored))
     jobs, budget, total = _plan(inv.run_dir, config, grid)
     progress = _Progress(budget, len(jobs), show=inv.show_progress)
@@ -105,8 +110,6 @@ def run_grid(args: argparse.Namespace, argv: Sequence[str]) -> int:
 def _stored(inv: Invocation) -> dict[str, Any] | None:
     """The ``config.json`` of the run ``--resume`` continues (None for a new run); a new run's folder
     must not hold results already."""
-    from capmj.bench.results import load_json
-
     run = inv.run_dir
     if not inv.resume:
         if run.episodes.exists() and run.episodes.stat().st_size > 0:
@@ -123,9 +126,6 @@ def _stored(inv: Invocation) -> dict[str, Any] | None:
 def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | None) -> _Grid:
     """Seeds, tasks and agent checked (and an LLM grid confirmed) before the folder is touched;
     then the folder is created and proved writable."""
-    from capmj.agents.factory import make_agent
-    from capmj.bench.manifest import run_manifest
-
     if config.agent_options.get("attempts") is not None and config.agent_options["attempts"] < 1:
         raise ConfigError(f"--attempts must be >= 1, got {config.agent_options['attempts']}")
     seeds = parse_seeds(config.seeds)
@@ -141,8 +141,6 @@ def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | 
 
 def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
     """Task names of a selector, each checked to load; plus the hand-registered task objects."""
-    from capmj.tasks import registry
-
     names = registry.resolve(selector)
     registered = []
     infos = {i.name: i for i in registry.list_tasks()}
@@ -172,10 +170,6 @@ def _confirm_llm_grid(inv: Invocation, agent: str, n: int) -> None:
 def _plan(run: RunDir, config: BenchConfig, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
     """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
     and the grid's size; prints the plan to stderr."""
-    from capmj.bench.results import read_records
-    from capmj.bench.spend import BudgetTracker
-    from capmj.bench.worker import Job
-
     existing, bad = read_records(run.episodes)
     done = {r.key for r in existing}
     budget = BudgetTracker(config.run_budget, existing)
@@ -229,10 +223,6 @@ def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: list[Job], budget
     """Run the jobs, appending each result to episodes.jsonl as it comes; Ctrl-C, SIGTERM and
     SIGHUP stop the workers and keep what finished.  Returns (stats or None when stopped, the
     stopping signal or None, wall seconds)."""
-    from capmj.bench.grid import run_jobs_to_file
-    from capmj.bench.pool import stop_resource_tracker
-    from capmj.bench.results import ResultsWriter
-
     interrupted: int | None = None
     stats: GridStats | None
     t0 = time.perf_counter()
@@ -253,9 +243,6 @@ def _write_summary(run: RunDir, config: BenchConfig, stats: GridStats | None, el
                    budget: BudgetTracker) -> tuple[list[EpisodeRecord], dict[str, Any]]:
     """summary.json/md/png over every episode in the folder (earlier runs' included), with this
     run's own figures under "run"; returns the records and the summary."""
-    from capmj.bench.report import write_summary
-    from capmj.bench.results import read_records, summarize
-
     records, _ = read_records(run.episodes)
     summary = summarize(records)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": progress.n, "workers": config.execution.workers,
@@ -268,9 +255,6 @@ def _write_summary(run: RunDir, config: BenchConfig, stats: GridStats | None, el
 def _print_outcome(out: Path, summary: dict[str, Any], records: list[EpisodeRecord], total: int, elapsed: float,
                    progress: _Progress, budget: BudgetTracker, interrupted: int | None) -> int:
     """Success per configuration on stdout, how to continue a stopped run on stderr; the exit code."""
-    from capmj.bench.report import pct_cell
-    from capmj.bench.rundir import EPISODES
-
     for label, st in summary["overall"].items():
         print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
               f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")

@@ -16,6 +16,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping, Sequence
 
+from capmj.agents.factory import agent_setting
+from capmj.agents.llm_meter import price_source
 from capmj.errors import ConfigError
 from capmj.records import Episode
 
@@ -77,12 +79,10 @@ class RunBudget:
         """ConfigError when a cost cap is asked for a model whose price is unknown."""
         if self.max_cost_usd is None:
             return
-        from capmj.agents.llm_meter import price_source
-
         model = getattr(agent, "model", None)
         if model is None:
             raise ConfigError("--max-cost-usd limits LLM spending; this agent makes no LLM calls")
-        if price_source(model, getattr(agent, "price", None)) == "unknown":
+        if price_source(model, agent_setting(agent, "price")) == "unknown":
             raise ConfigError(f"--max-cost-usd needs a price, but the price of {model!r} is unknown; "
                               "declare one with --price IN,OUT (USD per million tokens) or use --max-tokens")
 

@@ -16,9 +16,12 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
+from capmj.agents.factory import make_agent
 from capmj.bench.results import sanitize
 from capmj.errors import describe, error_facts
+from capmj.llm.client import set_request_gate
 from capmj.records import EpisodeResult
+from capmj.tasks import registry
 
 
 @dataclass(frozen=True)
@@ -78,13 +81,9 @@ class Worker:
         self._thread_count = 0
         self._init_error: tuple[str, str | None] | None = None
         if llm_gate is not None:
-            from capmj.llm.client import set_request_gate
-
             set_request_gate(llm_gate)
         try:
             if registered:
-                from capmj.tasks import registry
-
                 for task in pickle.loads(registered):
                     registry.register(task, replace=True)
             self._idle.put(self._build_agent())
@@ -92,8 +91,6 @@ class Worker:
             self._init_error = (describe(exc), error_facts(exc)[0])
 
     def _build_agent(self) -> Any:
-        from capmj.agents.factory import make_agent
-
         return make_agent(self.spec.name, **dict(self.spec.options))
 
     def _take_agent(self) -> Any:
@@ -118,15 +115,16 @@ class Worker:
         model = getattr(agent, "model", None)
         name = getattr(agent, "name", self.spec.name)
         try:
-            from capmj.tasks.registry import get_task
-
-            task = get_task(job.task)
+            task = registry.get_task(job.task)
         except Exception as exc:  # noqa: BLE001 - a broken plugin fails its own episodes only
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
-        from capmj.runner import record_episode
+        from capmj.runner import record_episode, run_episode  # MuJoCo: loaded by the workers, not the parent
 
         try:
-            result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
+            if job.rrd is None:  # --no-log
+                result = run_episode(task, job.seed, agent)
+            else:
+                result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
         except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
         return sanitize(result.to_dict())

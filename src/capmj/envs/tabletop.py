@@ -49,7 +49,7 @@ from capmj.sim.objects import BLOCK_SIZES, KINDS
 from capmj.sim.palette import COLOR_NAMES
 from capmj.sim.robot import ARM_JOINTS
 from capmj.sim.bounds import WORKSPACE
-from capmj.sim.cameras import IMAGE_H, IMAGE_W, VIEW_CAMERAS
+from capmj.sim.cameras import CameraRig, IMAGE_H, IMAGE_W, VIEW_CAMERAS
 from capmj.sim.pose import mat_yaw
 from capmj.sim.scene import HEIGHTMAP_PIXEL
 from capmj.sim.world import World
@@ -270,8 +270,6 @@ class TabletopEnv(dm_env.Environment):
         obs: dict[str, np.ndarray] = {}
         if c.cameras or c.heightmap:
             if self._rig is None:
-                from capmj.sim.cameras import CameraRig
-
                 self._rig = CameraRig(w, width=c.width, height=c.height, robot_meshes=c.robot_meshes)
         if c.cameras:
             frames = [self._rig.render(name) for name in c.cameras]

@@ -9,7 +9,10 @@ from pathlib import Path
 from typing import NoReturn
 
 from capmj.errors import CapmjError
+from capmj.generate.config import GenerateConfig, Limits, MODES, default_package
+from capmj.generate.run import generate
 from capmj.llm.options import add_llm_options, llm_values
+from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
 
 EPILOG = """examples:
   python -m capmj.generate --mode bottom-up --n 5 --model gpt-4o-mini --out gen/run1
@@ -29,9 +32,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parser() -> argparse.ArgumentParser:
-    from capmj.generate.config import MODES, GenerateConfig, default_package
-    from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
-
     ap = _Parser(prog="python -m capmj.generate", description=__doc__, epilog=EPILOG,
                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mode", required=True, choices=MODES, help="bottom-up: the LLM proposes; top-down: you name the task")
@@ -57,9 +57,6 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
-    from capmj.generate.config import GenerateConfig, Limits, default_package
-    from capmj.generate.run import generate
-
     try:
         cfg = GenerateConfig(
             mode=args.mode, model=args.model, out=args.out, n=args.n, name=args.name, description=args.description,

@@ -19,6 +19,7 @@ from capmj.confine.allowlist import CAPMJ_API, ordered_members
 from capmj.errors import CapmjError
 from capmj.generate.examples import NotSelfContained, self_contained
 from capmj.tasks import registry
+from capmj.tasks.protocol import make_scene
 
 MAX_SOURCE_CHARS = 12_000
 """An example is cut beyond this (a prompt budget, not a correctness limit)."""
@@ -38,8 +39,6 @@ class LibraryTask:
 
 def load_library() -> tuple[LibraryTask, ...]:
     """Every loadable installed task, sorted by name."""
-    from capmj.tasks.protocol import make_scene
-
     out = []
     for info in registry.list_tasks():
         try:

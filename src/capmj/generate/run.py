@@ -8,7 +8,6 @@ order they finish in, so two runs over the same LLM answers write the same files
 from __future__ import annotations
 
 import json
-import os
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +18,7 @@ from capmj.generate.config import GenerateConfig
 from capmj.generate.library import load_library
 from capmj.generate.package import JOURNAL, write_package
 from capmj.llm import LLMClient, LLMConfig
+from capmj.llm.cache import env_cache_dir
 
 
 @dataclass(frozen=True)
@@ -31,9 +31,7 @@ class RunResult:
 
 
 def _client(cfg: GenerateConfig) -> LLMClient:
-    from capmj.agents.llm_agent import CACHE_ENV
-
-    cache = cfg.cache_dir or (Path(os.environ[CACHE_ENV]) if os.environ.get(CACHE_ENV, "").strip() else None)
+    cache = cfg.cache_dir or env_cache_dir()
     return LLMClient(LLMConfig(model=cfg.model, api_base=cfg.api_base, temperature=cfg.temperature,
                                max_tokens=cfg.max_tokens, timeout_s=cfg.timeout_s, cache_dir=cache))
 

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
+from capmj.atomic import atomic_write
 from capmj.errors import ConfigError
 from capmj.llm.options import add_llm_options, llm_values
 
@@ -117,8 +118,6 @@ def markdown(summary: dict[str, Any]) -> str:
 
 
 def _write_text(path: Path, text: str) -> None:
-    from capmj.atomic import atomic_write
-
     with atomic_write(path, "w", encoding="utf-8") as f:
         f.write(text)
 

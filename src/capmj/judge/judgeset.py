@@ -20,6 +20,7 @@ from a ``SeedSequence``, so adding a kind never changes the others, and the same
 from __future__ import annotations
 
 import math
+import sys
 import zlib
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Iterator, Sequence
@@ -32,6 +33,7 @@ from capmj.judge import perturb
 from capmj.judge.cases import HARD_KINDS, KINDS, JudgeCase, Stage, layout_of, layout_rows
 from capmj.judge.perturb import Proposal
 from capmj.sim.state import Pose, SceneState
+from capmj.tasks import registry
 from capmj.tasks.protocol import Task
 
 __all__ = ["MAX_HARD_PROPOSALS", "MAX_PROPOSALS", "NEAR_MARGIN", "PLACE_TOL", "STILL_TOL", "JudgeSet", "Skip", "build_cases",
@@ -164,8 +166,6 @@ def _take(it: Iterator[Proposal], n: int) -> Iterator[Proposal]:
 def build_set(task_names: Sequence[str], seeds: Sequence[int], *, kinds: Iterable[str] = KINDS,
               progress: bool = False, get_task: Callable[[str], Any] | None = None) -> JudgeSet:
     """Cases for every (task, seed), tasks outer, in the given order (a progress bar when asked)."""
-    from capmj.tasks import registry
-
     lookup: Callable[[str], Any] = registry.get_task if get_task is None else get_task
     kinds = tuple(kinds)
     unknown = [k for k in kinds if k not in KINDS]
@@ -174,8 +174,6 @@ def build_set(task_names: Sequence[str], seeds: Sequence[int], *, kinds: Iterabl
     pairs = [(t, s) for t in task_names for s in seeds]
     bar: Any = None
     if progress:
-        import sys
-
         from tqdm import tqdm
 
         bar = tqdm(total=len(pairs), file=sys.stderr, unit="seed", dynamic_ncols=True, desc="judge set")

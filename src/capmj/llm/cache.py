@@ -18,6 +18,7 @@ import hashlib
 import json
 import logging
 import math
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -25,10 +26,20 @@ from typing import Any
 from capmj.atomic import atomic_write
 from capmj.errors import ConfigError
 
-__all__ = ["CACHE_FORMAT", "CompletionCache", "cache_key"]
+__all__ = ["CACHE_ENV", "CACHE_FORMAT", "CompletionCache", "cache_key", "env_cache_dir"]
 
 CACHE_FORMAT = 1
 """Bumped whenever the stored record layout changes; older entries then read as misses."""
+
+CACHE_ENV = "CAPMJ_LLM_CACHE"
+"""The cache folder of LLM completions for commands not given one (the bench, the generator):
+an environment variable, so it reaches every worker process."""
+
+
+def env_cache_dir() -> Path | None:
+    """The cache folder ``$CAPMJ_LLM_CACHE`` names, or None."""
+    value = os.environ.get(CACHE_ENV, "").strip()
+    return Path(value) if value else None
 
 _log = logging.getLogger(__name__)
 

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from capmj import __version__
 from capmj.log import geometry as G
 from capmj.log.clock import EpisodeClock
 from capmj.log.images import SceneCameras, depth_mm, image_entity
@@ -331,8 +332,6 @@ class RerunRecorder:
         if self._image_error:
             s["image_error"] = self._image_error
         s["bodies"] = sorted(self._bodies | self._static_bodies)
-        from capmj import __version__
-
         s["versions"] = {"capmj": __version__, "rerun": getattr(rr, "__version__", "?")}
         s["written_at"] = _time.strftime("%Y-%m-%dT%H:%M:%S%z")
         self.summary = s

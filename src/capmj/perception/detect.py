@@ -25,10 +25,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmj.perception.footprint import FIXTURE_RECT, Rect, fit_l, min_area_rect, square_yaw
+from capmj.perception.footprint import Rect, fit_l, min_area_rect, square_yaw
 from capmj.perception.segment import Segment
 from capmj.sim.objects import BALL_RADIUS, BLOCK_SIZES, BOWL_HEIGHT, BOWL_RADIUS, FIXTURE_HEIGHT, ZONE_HEIGHT, ZONE_SIZE
 from capmj.sim.palette import COLOR_NAMES
+from capmj.sim.shapes import FIXTURE_RECT
 
 BOWL_MIN_SIDE = 0.09
 FIXTURE_MIN_LENGTH = 0.08

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from capmj.sim.objects import BLOCK_SIZES, FIXTURE_CLEARANCE, FIXTURE_LONG, FIXTURE_SHORT, FIXTURE_WALL
+from capmj.sim.objects import FIXTURE_WALL
+from capmj.sim.shapes import FIXTURE_ORIGIN_IN
 
 
 @dataclass(frozen=True)
@@ -90,20 +91,6 @@ def square_yaw(rect: Rect) -> float:
     return (rect.angle + math.pi / 4) % (math.pi / 2) - math.pi / 4
 
 
-FIXTURE_RECT = (FIXTURE_LONG, FIXTURE_SHORT + FIXTURE_WALL)
-"""Sides (m) of the rectangle enclosing the L: 10 x 6 cm."""
-FIXTURE_ORIGIN_IN = FIXTURE_WALL + FIXTURE_CLEARANCE + BLOCK_SIZES["small"] / 2
-"""How far (m) the origin (slot (0, 0)) lies in from the L's outer corner along each wall: a wall,
-the clearance and half a small block (3.3 cm; ``mjcf/fixture.xml``)."""
-FIXTURE_WALLS: tuple[tuple[tuple[float, float], float, float], ...] = (
-    ((FIXTURE_LONG / 2 - FIXTURE_ORIGIN_IN, FIXTURE_WALL / 2 - FIXTURE_ORIGIN_IN), FIXTURE_LONG / 2, FIXTURE_WALL / 2),
-    ((FIXTURE_WALL / 2 - FIXTURE_ORIGIN_IN, FIXTURE_WALL + FIXTURE_SHORT / 2 - FIXTURE_ORIGIN_IN),
-     FIXTURE_WALL / 2, FIXTURE_SHORT / 2),
-)
-"""((centre x, centre y), half x, half y) of the long and the short wall in the fixture's frame
-(``mjcf/fixture.xml`` geoms g0, g1; ``tests/test_mjcf.py`` checks that file against the constants)."""
-
-
 @dataclass(frozen=True)
 class LFit:
     """A fixture's pose: its origin (slot (0, 0), the body origin) and yaw, plus the fit residue."""
@@ -119,7 +106,7 @@ def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
     """The L-fixture in its enclosing rectangle: which corner the walls meet at fixes the yaw.
 
     In the fixture's frame the long wall runs along +x from the corner and the short wall along
-    +y (``mjcf/fixture.xml``), and the origin is :data:`FIXTURE_ORIGIN_IN` in from the corner
+    +y (:data:`capmj.sim.shapes.FIXTURE_WALLS`), and the origin is ``FIXTURE_ORIGIN_IN`` in from the corner
     along each (wall + clearance + half a slot).  Each of the four corner hypotheses (the long side's two directions x
     the short side's two) is scored by the cells lying on its two walls; the best wins.
     """
@@ -147,4 +134,4 @@ def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
     return best
 
 
-__all__ = ["FIXTURE_ORIGIN_IN", "FIXTURE_RECT", "FIXTURE_WALLS", "LFit", "Rect", "cell_corners", "fit_l", "min_area_rect", "square_yaw"]
+__all__ = ["LFit", "Rect", "cell_corners", "fit_l", "min_area_rect", "square_yaw"]

@@ -20,6 +20,7 @@ from typing import Any, Sequence
 
 from capmj.replay.frames import export_frames
 from capmj.replay.reader import EpisodeLog, ReplayError, read_episode
+from capmj.replay.run_dir import failed_episodes, format_failed
 from capmj.replay.viewer import open_viewer, serve_web
 
 
@@ -100,8 +101,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _run_dir(args: Any) -> int:
-    from capmj.replay.run_dir import failed_episodes, format_failed
-
     if args.json or args.texts or args.frames or args.open or args.web:
         print(f"capmj-replay: error: {args.path} is a run folder; --json/--texts/--frames/--open/--web take one "
               "episode .rrd (listed below)", file=sys.stderr)

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator
+
+import numpy as np
 
 from capmj.log.paths import ATTEMPTS, CAMERA, SUMMARY_JSON_PATH, TEXT
 
@@ -44,8 +47,6 @@ def iter_chunks(path: Path) -> Iterator[Any]:
     :class:`ReplayError` saying so."""
     if not path.is_file():
         raise ReplayError(f"no such file: {path}")
-    import warnings
-
     try:
         from rerun.chunk import RrdReader
 
@@ -118,15 +119,11 @@ _CHANNEL_DTYPES = {6: "uint8", 7: "int8", 8: "uint16", 9: "int16", 10: "uint32",
 
 
 def _channel_dtype(code: Any) -> Any:
-    import numpy as np
-
     return np.dtype(_CHANNEL_DTYPES.get(int(code), "uint8") if code is not None else "uint8")
 
 
 def iter_images(path: str | Path) -> Iterator[LoggedImage]:
     """Every camera image logged in the file (``/camera/...``), in file order."""
-    import numpy as np
-
     for c in iter_chunks(Path(path)):
         ent = c.entity_path
         if not ent.startswith(CAMERA + "/"):

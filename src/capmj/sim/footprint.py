@@ -8,7 +8,8 @@ and switched to a world box beyond 20° of tilt, the judge rebuilt centred boxes
 extents beyond 15°, and the fixture's walls had a third copy in the perceived API.
 
 The model: bowls and balls are discs (their outline whatever their yaw); blocks, zones and each
-wall of a fixture are rectangles in the object's frame (:func:`local_boxes`), turned by its yaw;
+wall of a fixture (:data:`capmj.sim.shapes.FIXTURE_WALLS`) are rectangles in the object's frame
+(:func:`local_boxes`), turned by its yaw;
 an object tilted more than :data:`TILT_TOL` covers the world xy box of those boxes instead.
 
 The arm's motion does not use this: it plans descents and transits on coarse axis-aligned world
@@ -22,18 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmj.sim.objects import (
-    BALL_RADIUS,
-    BLOCK_SIZES,
-    BOWL_RADIUS,
-    FIXTURE_CLEARANCE,
-    FIXTURE_HEIGHT,
-    FIXTURE_LONG,
-    FIXTURE_SHORT,
-    FIXTURE_WALL,
-    ObjectSpec,
-)
+from capmj.sim.objects import BALL_RADIUS, BOWL_RADIUS, ObjectSpec
 from capmj.sim.pose import from_frame_2d
+from capmj.sim.shapes import FIXTURE_WALLS, LocalBox
 from capmj.sim.state import Pose
 
 TILT_TOL = math.radians(15.0)
@@ -73,30 +65,6 @@ class Rect:
 
 Part = Disc | Rect
 """One footprint part."""
-
-
-@dataclass(frozen=True, slots=True)
-class LocalBox:
-    """A box in an object's own frame: centre and half sizes (m), axes along the object's."""
-
-    centre: tuple[float, float, float]
-    half: tuple[float, float, float]
-
-
-FIXTURE_SLOT = BLOCK_SIZES["small"]
-"""Slot pitch ``a`` (m) of an L-fixture: its slots hold small blocks, and its body origin is the
-centre of slot (0, 0)."""
-_INNER = FIXTURE_SLOT / 2 + FIXTURE_CLEARANCE  # slot (0, 0) centre to a wall's inner face
-FIXTURE_WALLS: tuple[LocalBox, ...] = (
-    LocalBox((FIXTURE_LONG / 2 - _INNER - FIXTURE_WALL, -(_INNER + FIXTURE_WALL / 2), 0.0),
-             (FIXTURE_LONG / 2, FIXTURE_WALL / 2, FIXTURE_HEIGHT / 2)),
-    LocalBox((-(_INNER + FIXTURE_WALL / 2), FIXTURE_SHORT / 2 - _INNER, 0.0),
-             (FIXTURE_WALL / 2, FIXTURE_SHORT / 2, FIXTURE_HEIGHT / 2)),
-)
-"""The L-fixture's walls in its frame (origin = slot (0, 0), a small block's centre): the long one
-along the slot row's −y side, the short one along its −x side, both inner faces
-``FIXTURE_CLEARANCE`` clear of the slots' footprints and both outer ends flush at the corner.
-``mjcf/fixture.xml`` builds exactly these (``tests/test_mjcf.py`` compares them)."""
 
 
 def local_boxes(spec: ObjectSpec) -> tuple[LocalBox, ...]:
@@ -154,5 +122,5 @@ def shape(spec: ObjectSpec, pose: Pose):
     return shapes[0] if len(shapes) == 1 else unary_union(shapes)
 
 
-__all__ = ["DISC_RADIUS", "Disc", "FIXTURE_SLOT", "FIXTURE_WALLS", "LocalBox", "Part", "ROUND_KINDS", "Rect", "TILT_TOL", "local_boxes",
+__all__ = ["DISC_RADIUS", "Disc", "Part", "ROUND_KINDS", "Rect", "TILT_TOL", "local_boxes",
            "part_shape", "parts", "shape", "world_box"]

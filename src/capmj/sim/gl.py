@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import importlib
 import os
 import subprocess
 import sys
@@ -136,8 +137,6 @@ def _resolve_imported() -> tuple[str, Any]:
     still be loaded as long as PyOpenGL has not been imported with another platform (mujoco's GLFW
     path does not import PyOpenGL); the first backend whose subprocess probe succeeds is used.
     """
-    import importlib
-
     backend = imported_backend()
     if backend in BACKENDS:
         return backend, importlib.import_module(f"mujoco.{backend}").GLContext

@@ -9,7 +9,7 @@ one place.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from capmj.errors import ConfigError
@@ -122,8 +122,6 @@ class ObjectSpec:
 
     def moved(self, pos: tuple[float, float, float], yaw: float | None = None) -> "ObjectSpec":
         """A copy at another pose (used by scene generators while sampling)."""
-        from dataclasses import replace
-
         x, y, z = (float(v) for v in pos)
         return replace(self, pos=(x, y, z), yaw=self.yaw if yaw is None else float(yaw))
 

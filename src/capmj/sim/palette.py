@@ -9,6 +9,8 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Mapping
 
+from capmj.errors import ConfigError
+
 _RGB_255: dict[str, tuple[int, int, int]] = {
     "blue": (78, 121, 167),
     "red": (255, 87, 89),
@@ -43,6 +45,4 @@ def rgba(name: str) -> tuple[float, float, float, float]:
     try:
         return COLORS[name]
     except KeyError:
-        from capmj.errors import ConfigError
-
         raise ConfigError(f"unknown colour {name!r}; valid colours: {', '.join(COLOR_NAMES)}") from None

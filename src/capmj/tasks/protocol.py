@@ -14,6 +14,7 @@ from typing import Any, Literal, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
+from capmj.errors import TaskError
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.state import SceneState
 
@@ -130,6 +131,4 @@ def make_scene(task: Task, seed: int) -> Scene:
             return task.generate(rng)
         except Resample:
             continue
-    from capmj.errors import TaskError
-
     raise TaskError(f"task {task.name!r} could not place a scene for seed {seed} in {MAX_RESAMPLES} draws")

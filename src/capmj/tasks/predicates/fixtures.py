@@ -7,7 +7,7 @@ from typing import Iterable
 
 import numpy as np
 
-from capmj.sim.footprint import FIXTURE_SLOT
+from capmj.sim.shapes import FIXTURE_SLOT
 from capmj.sim.objects import FIXTURE_HEIGHT, FIXTURE_LONG, FIXTURE_WALL
 from capmj.sim.pose import Vector, from_frame_2d
 from capmj.sim.state import SceneState
