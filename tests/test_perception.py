@@ -136,7 +136,7 @@ def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     local = np.concatenate([_rect_points(x, y, 2 * hx, 2 * hy, 0.0, 0.002) for (x, y), hx, hy in _file_walls()])
     c, s = math.cos(yaw), math.sin(yaw)
     xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
-    fit = fit_l(xy, min_area_rect(xy), 0.002)
+    fit = fit_l(xy, 0.002)
     assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
     assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     assert fit.mismatch < 0.05
