@@ -282,6 +282,29 @@ def test_a_tower_of_five_keeps_all_five_names() -> None:
     assert {t.detection.color for t in tracker.objects if t.visible} == {"yellow", "pink"}
 
 
+def test_a_fixed_object_cut_into_pieces_keeps_its_id_and_absorbs_them() -> None:
+    from capmj.perception.detect import Detection
+    from capmj.perception.track import Tracker
+
+    def zone(x: float, y: float, half: float) -> Detection:
+        return Detection("zone", "green", None, 1.0, (x, y, 0.0005), 0.0,
+                         ((x - half, y - half, 0.0), (x + half, y + half, 0.001)), 0.9)
+
+    whole = zone(0.5, 0.0, 0.06)
+    tracker = Tracker.start([whole, _block("green", 0.3, 0.2, 0.02), _block("red", 0.3, -0.2, 0.02)])
+    names = tracker.names
+    # A block across the zone cuts its face into two halves, both too far off to match the zone;
+    # a green block put inside the zone's box is matched by the move and stays a block; a red
+    # piece inside it is not the zone's.
+    halves = [zone(0.46, 0.0, 0.035), zone(0.545, 0.0, 0.02)]
+    seen = [*halves, _block("green", 0.5, 0.0, 0.0205), _block("red", 0.3, -0.2, 0.02), _block("red", 0.52, 0.04, 0.02)]
+    tracker = tracker.update(seen, moved={2: (0.5, 0.0, 0.0205)})
+    assert tracker.names == names + ["movable small red block with obj_id 4"]
+    assert tracker.by_id(1).detection == whole  # fixed: it stays where it was seen whole
+    # Without the zone's pieces in view nothing says it is still there: it is dropped.
+    assert 1 not in {t.obj_id for t in tracker.update([_block("red", 0.3, -0.2, 0.02)]).objects}
+
+
 def test_a_block_that_vanishes_is_dropped_and_new_ones_get_fresh_ids() -> None:
     from capmj.perception.track import Tracker
 

@@ -88,3 +88,17 @@ def test_a_block_in_the_fixtures_slot_does_not_split_it(reset) -> None:
     kept = _fixture_of(after, float(pose.pos[0]), float(pose.pos[1]))
     assert kept.obj_id == _fixture_of(before, float(pose.pos[0]), float(pose.pos[1])).obj_id
     assert math.dist(kept.detection.position[:2], pose.pos[:2]) < 0.003
+
+
+def test_a_block_left_on_the_fixtures_corner_does_not_take_its_name(reset) -> None:
+    # Where the first block went down with the old fit: on the walls at the L's corner, where its
+    # top cuts the fixture's top into pieces (two balls and a block of the fixture's colour).
+    objects, world, _ = reset
+    fixture = next(o for o in objects if o.kind == "fixture")
+    pose = world.pose(fixture.obj_id)
+    before, after, block_id = _after_move(reset, 0.4561, 0.3485, 0.062, float(pose.yaw))
+    assert after.by_id(block_id).detection.position[2] > 0.05  # it does lie on the walls
+    assert after.names == before.names
+    kept = _fixture_of(after, float(pose.pos[0]), float(pose.pos[1]))
+    assert kept.obj_id == _fixture_of(before, float(pose.pos[0]), float(pose.pos[1])).obj_id
+    assert kept.detection == _fixture_of(before, float(pose.pos[0]), float(pose.pos[1])).detection
