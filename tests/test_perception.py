@@ -239,6 +239,41 @@ def test_score_gates_and_counts_confusions() -> None:
     assert s.matches[0].yaw_error == pytest.approx(0.0, abs=1e-9)  # a square repeats every 90 degrees
 
 
+def test_score_pairs_a_block_in_a_fixture_slot_with_itself_not_crosswise() -> None:
+    # A fixture reports its slot (0, 0, 0), so a block inserted there stands at the fixture's own
+    # position: both detections lie nearer the other kind's truth (1 mm) than their own (5 mm).
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("fixture", "brown", None, (0.500, 0.1, 0.02), 0.3),
+              TrueObject("block", "red", "small", (0.506, 0.1, 0.02), 0.3)]
+    dets = [Detection("block", "red", "small", 1.0, (0.501, 0.1, 0.02), 0.3, box, 0.9),
+            Detection("fixture", "brown", None, 1.0, (0.505, 0.1, 0.02), 0.35, box, 0.9)]
+    s = score(dets, truths)
+    assert sorted((m.truth, m.detection) for m in s.matches) == [(0, 1), (1, 0)]
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches) and s.confusions == ()
+    assert [m.position_error for m in s.matches] == pytest.approx([0.005, 0.005], abs=1e-9)
+    fixture = next(m for m in s.matches if m.truth == 0)
+    assert fixture.yaw_error == pytest.approx(0.05, abs=1e-9)
+
+
+def test_score_prefers_more_matches_to_matching_kinds() -> None:
+    # A zone seen as a block still counts as matched (a kind error), rather than leaving the block
+    # detection that could be its own kind's pair unmatched.
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("block", "red", "small", (0.5, 0.0, 0.02), 0.0),
+              TrueObject("zone", "red", None, (0.53, 0.0, 0.02), 0.0)]
+    dets = [Detection("block", "red", "small", 1.0, (0.512, 0.0, 0.02), 0.0, box, 0.9),
+            Detection("block", "red", "small", 1.0, (0.495, 0.0, 0.02), 0.0, box, 0.9)]
+    s = score(dets, truths)
+    assert sorted((m.truth, m.detection) for m in s.matches) == [(0, 1), (1, 0)]
+    assert s.to_dict()["kind_errors"] == 1
+
+
 # ---------------------------------------------------------------------- names and tracking
 def _block(color: str, x: float, y: float, z: float, size: str = "small"):
     from capmj.perception.detect import Detection
