@@ -114,7 +114,7 @@ class LFit:
     y: float
     yaw: float
     mismatch: float
-    """Fraction of the cells off the fitted L's walls (0 = perfect)."""
+    """Fraction of the cells more than a cell off the fitted L's walls (0 = perfect)."""
 
 
 _YAW_STEPS = 360
@@ -160,13 +160,13 @@ def fit_l(xy: np.ndarray, cell: float) -> LFit:
     fixed simplex.
     """
     p = np.asarray(xy, dtype=np.float64)
-    slack = cell / 2
+    overhang = cell / 2  # the outermost cells' centres lie about half a cell out of the faces
     yaws = np.linspace(-math.pi, math.pi, _YAW_STEPS, endpoint=False)
     c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
     u = c * p[None, :, 0] + s * p[None, :, 1]  # (yaws, N): coordinates along the L's +x and +y
     v = -s * p[None, :, 0] + c * p[None, :, 1]
-    u0 = u.min(axis=1, keepdims=True) + slack + FIXTURE_ORIGIN_IN  # the origin's coordinates
-    v0 = v.min(axis=1, keepdims=True) + slack + FIXTURE_ORIGIN_IN
+    u0 = u.min(axis=1, keepdims=True) + overhang + FIXTURE_ORIGIN_IN  # the origin's coordinates
+    v0 = v.min(axis=1, keepdims=True) + overhang + FIXTURE_ORIGIN_IN
     cost = (_outside(u - u0, v - v0, 0.0) ** 2).sum(axis=1)
     k = int(np.argmin(cost))
     ox, oy = float(c[k, 0] * u0[k, 0] - s[k, 0] * v0[k, 0]), float(s[k, 0] * u0[k, 0] + c[k, 0] * v0[k, 0])
