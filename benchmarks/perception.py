@@ -4,7 +4,8 @@ For each (task, seed) the scene is spawned and settled ("reset"), and optionally
 oracle ("final": stacks, blocks in bowls and zones; the arm is then put back at its home pose,
 out of the way, before the pictures are taken); the three cameras are rendered (RGB + depth
 only) and :class:`capmj.perception.ClassicalPerceiver` runs on them.  Its detections are matched
-one-to-one to the true objects (``capmj.perception.score``: xy distance, 2 cm gate).  Only this
+one-to-one to the true objects (``capmj.perception.score``: 3-D distance within a 2 cm gate,
+same-kind pairs first).  Only this
 script and the tests read the truth.
 
 Output: one JSON line per scene on stderr, then a summary JSON object on stdout per state:

@@ -147,7 +147,7 @@ def test_fit_l_finds_the_fixture_origin_and_yaw(yaw: float) -> None:
     local = np.concatenate([_rect_points(x, y, 2 * hx, 2 * hy, 0.0, 0.002) for (x, y), hx, hy in _file_walls()])
     c, s = math.cos(yaw), math.sin(yaw)
     xy = local @ np.array([[c, s], [-s, c]]) + (0.5, 0.1)
-    fit = fit_l(xy, min_area_rect(xy), 0.002)
+    fit = fit_l(xy, 0.002)
     assert (fit.x, fit.y) == pytest.approx((0.5, 0.1), abs=1e-3)
     assert math.remainder(fit.yaw - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     assert fit.mismatch < 0.05
@@ -250,6 +250,41 @@ def test_score_gates_and_counts_confusions() -> None:
     assert s.matches[0].yaw_error == pytest.approx(0.0, abs=1e-9)  # a square repeats every 90 degrees
 
 
+def test_score_pairs_a_block_in_a_fixture_slot_with_itself_not_crosswise() -> None:
+    # A fixture reports its slot (0, 0, 0), so a block inserted there stands at the fixture's own
+    # position: both detections lie nearer the other kind's truth (1 mm) than their own (5 mm).
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("fixture", "brown", None, (0.500, 0.1, 0.02), 0.3),
+              TrueObject("block", "red", "small", (0.506, 0.1, 0.02), 0.3)]
+    dets = [Detection("block", "red", "small", 1.0, (0.501, 0.1, 0.02), 0.3, box, 0.9),
+            Detection("fixture", "brown", None, 1.0, (0.505, 0.1, 0.02), 0.35, box, 0.9)]
+    s = score(dets, truths)
+    assert sorted((m.truth, m.detection) for m in s.matches) == [(0, 1), (1, 0)]
+    assert all(m.kind_ok and m.color_ok and m.size_ok for m in s.matches) and s.confusions == ()
+    assert [m.position_error for m in s.matches] == pytest.approx([0.005, 0.005], abs=1e-9)
+    fixture = next(m for m in s.matches if m.truth == 0)
+    assert fixture.yaw_error == pytest.approx(0.05, abs=1e-9)
+
+
+def test_score_prefers_more_matches_to_matching_kinds() -> None:
+    # A zone seen as a block still counts as matched (a kind error), rather than leaving the block
+    # detection that could be its own kind's pair unmatched.
+    from capmj.perception.detect import Detection
+    from capmj.perception.score import TrueObject, score
+
+    box = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truths = [TrueObject("block", "red", "small", (0.5, 0.0, 0.02), 0.0),
+              TrueObject("zone", "red", None, (0.53, 0.0, 0.02), 0.0)]
+    dets = [Detection("block", "red", "small", 1.0, (0.512, 0.0, 0.02), 0.0, box, 0.9),
+            Detection("block", "red", "small", 1.0, (0.495, 0.0, 0.02), 0.0, box, 0.9)]
+    s = score(dets, truths)
+    assert sorted((m.truth, m.detection) for m in s.matches) == [(0, 1), (1, 0)]
+    assert s.to_dict()["kind_errors"] == 1
+
+
 # ---------------------------------------------------------------------- names and tracking
 def _block(color: str, x: float, y: float, z: float, size: str = "small"):
     from capmj.perception.detect import Detection
@@ -291,6 +326,29 @@ def test_a_tower_of_five_keeps_all_five_names() -> None:
                              moved={ids["pink"]: (0.7, 0.3, 0.02)})
     assert tracker.names == names
     assert {t.detection.color for t in tracker.objects if t.visible} == {"yellow", "pink"}
+
+
+def test_a_fixed_object_cut_into_pieces_keeps_its_id_and_absorbs_them() -> None:
+    from capmj.perception.detect import Detection
+    from capmj.perception.track import Tracker
+
+    def zone(x: float, y: float, half: float) -> Detection:
+        return Detection("zone", "green", None, 1.0, (x, y, 0.0005), 0.0,
+                         ((x - half, y - half, 0.0), (x + half, y + half, 0.001)), 0.9)
+
+    whole = zone(0.5, 0.0, 0.06)
+    tracker = Tracker.start([whole, _block("green", 0.3, 0.2, 0.02), _block("red", 0.3, -0.2, 0.02)])
+    names = tracker.names
+    # A block across the zone cuts its face into two halves, both too far off to match the zone;
+    # a green block put inside the zone's box is matched by the move and stays a block; a red
+    # piece inside it is not the zone's.
+    halves = [zone(0.46, 0.0, 0.035), zone(0.545, 0.0, 0.02)]
+    seen = [*halves, _block("green", 0.5, 0.0, 0.0205), _block("red", 0.3, -0.2, 0.02), _block("red", 0.52, 0.04, 0.02)]
+    tracker = tracker.update(seen, moved={2: (0.5, 0.0, 0.0205)})
+    assert tracker.names == names + ["movable small red block with obj_id 4"]
+    assert tracker.by_id(1).detection == whole  # fixed: it stays where it was seen whole
+    # Without the zone's pieces in view nothing says it is still there: it is dropped.
+    assert 1 not in {t.obj_id for t in tracker.update([_block("red", 0.3, -0.2, 0.02)]).objects}
 
 
 def test_a_block_that_vanishes_is_dropped_and_new_ones_get_fresh_ids() -> None:

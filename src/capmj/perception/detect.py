@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmj.perception.footprint import Rect, fit_l, min_area_rect, square_yaw
+from capmj.perception.footprint import Rect, fit_l, l_corners, min_area_rect, square_yaw
 from capmj.perception.segment import Segment
 from capmj.sim.objects import BALL_RADIUS, BLOCK_SIZES, BOWL_HEIGHT, BOWL_RADIUS, FIXTURE_HEIGHT, ZONE_HEIGHT, ZONE_SIZE
 from capmj.sim.palette import COLOR_NAMES
@@ -134,12 +134,13 @@ def ball(seg: Segment, cell: float) -> Detection:
 
 
 def fixture(seg: Segment, cell: float) -> Detection:
-    r = _rect(seg.all_xy, cell)
-    fit = fit_l(seg.all_xy, r, cell)
-    conf = (_colour_confidence(seg) * _agreement(r.length, FIXTURE_RECT[0], 0.03)
-            * _agreement(r.width, FIXTURE_RECT[1], 0.03) * max(0.0, 1.0 - fit.mismatch))
-    corners = np.array([[r.cx, r.cy]]) + np.array([[su * r.length / 2, sv * r.width / 2]
-                                                   for su in (-1, 1) for sv in (-1, 1)]) @ np.stack(r.axes)
+    fit = fit_l(seg.all_xy, cell)
+    # The cells' extent along the fitted L's own axes (its enclosing rectangle, 10 x 6 cm).
+    c, s = math.cos(fit.yaw), math.sin(fit.yaw)
+    u, v = seg.all_xy @ np.array([c, s]), seg.all_xy @ np.array([-s, c])
+    conf = (_colour_confidence(seg) * _agreement(float(np.ptp(u)), FIXTURE_RECT[0], 0.03)
+            * _agreement(float(np.ptp(v)), FIXTURE_RECT[1], 0.03) * max(0.0, 1.0 - fit.mismatch))
+    corners = l_corners(fit)
     lo, hi = corners.min(axis=0), corners.max(axis=0)
     return Detection("fixture", COLOR_NAMES[seg.colour], None, 1.0, (fit.x, fit.y, FIXTURE_HEIGHT / 2), fit.yaw,
                      ((float(lo[0]), float(lo[1]), 0.0), (float(hi[0]), float(hi[1]), FIXTURE_HEIGHT)), conf)

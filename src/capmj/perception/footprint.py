@@ -5,7 +5,8 @@ larger square, a fixture an L inside a 10 x 6 cm rectangle.  The minimum-area en
 of the cells' convex hull recovers centre, sides and angle without assuming which: one of its
 sides is collinear with a hull edge (Freeman & Shapira 1975), so only the hull's edge directions
 are tried.  Cells are squares, so the hull is taken over their four corners, which makes the
-fitted sides the true extent rather than centre-to-centre distances.
+fitted sides the true extent rather than centre-to-centre distances.  A fixture is not fitted by
+its rectangle but as an L (:func:`fit_l`).
 """
 
 from __future__ import annotations
@@ -14,10 +15,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize
 from scipy.spatial import ConvexHull, QhullError
 
-from capmj.sim.objects import FIXTURE_WALL
-from capmj.sim.shapes import FIXTURE_ORIGIN_IN
+from capmj.sim.shapes import FIXTURE_ORIGIN_IN, FIXTURE_WALLS
 
 
 @dataclass(frozen=True)
@@ -99,39 +100,86 @@ class LFit:
     y: float
     yaw: float
     mismatch: float
-    """Fraction of the cells off the fitted L's walls (0 = perfect)."""
+    """Fraction of the cells more than a cell off the fitted L's walls (0 = perfect)."""
 
 
-def fit_l(xy: np.ndarray, rect: Rect, cell: float) -> LFit:
-    """The L-fixture in its enclosing rectangle: which corner the walls meet at fixes the yaw.
+_YAW_STEPS = 360
+"""Yaw hypotheses (1° apart) of the L search in :func:`fit_l`."""
 
-    In the fixture's frame the long wall runs along +x from the corner and the short wall along
-    +y (:data:`capmj.sim.shapes.FIXTURE_WALLS`), and the origin is ``FIXTURE_ORIGIN_IN`` in from the corner
-    along each (wall + clearance + half a slot).  Each of the four corner hypotheses (the long side's two directions x
-    the short side's two) is scored by the cells lying on its two walls; the best wins.
+
+def _outside(u: np.ndarray, v: np.ndarray, slack: float) -> np.ndarray:
+    """Distance (m) of fixture-frame points from the nearer of the L's two walls, each grown by
+    ``slack`` (0 on a wall); any leading axes broadcast."""
+    d = None
+    for wall in FIXTURE_WALLS:
+        (cx, cy, _), (hx, hy, _) = wall.centre, wall.half
+        dx = np.maximum(np.abs(u - cx) - hx - slack, 0.0)
+        dy = np.maximum(np.abs(v - cy) - hy - slack, 0.0)
+        w = np.hypot(dx, dy)
+        d = w if d is None else np.minimum(d, w)
+    assert d is not None
+    return d
+
+
+def _to_frame(p: np.ndarray, x: float, y: float, yaw: float) -> tuple[np.ndarray, np.ndarray]:
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = p[:, 0] - x, p[:, 1] - y
+    return c * dx + s * dy, -s * dx + c * dy
+
+
+def fit_l(xy: np.ndarray, cell: float) -> LFit:
+    """The L-fixture's origin and yaw that put the cells on its two walls.
+
+    Why not the enclosing rectangle: the L's convex hull has a long diagonal edge (from the end of
+    one wall to the end of the other), and with a few grown cells along a wall the minimum-area
+    rectangle of a turned L aligns with that diagonal instead of the walls (a 28° error at reset on
+    insert-blocks-in-fixture seed 10007).  The L is fitted as the shape it is instead:
+
+    * every yaw 1° apart is tried; in the fixture's frame the long wall runs along +x from the
+      corner and the short wall along +y (``mjcf/fixture.xml``), so under the right yaw the cells'
+      smallest x and y are the corner's two outer faces, :data:`FIXTURE_ORIGIN_IN` out from the
+      origin — that places the L for the yaw; the yaw whose L leaves the least squared distance
+      of cells off its walls wins (a mirrored L cannot fit, so there is no mirror ambiguity);
+    * the winner is refined by Nelder-Mead over (x, y, yaw) on the same cost.
+
+    Cells hold the highest point falling in them, so they overhang a wall's two faces alike and the
+    squared overhang is least with the wall centred on them.  Deterministic: a fixed grid and a
+    fixed simplex.
     """
-    p = np.asarray(xy, dtype=np.float64) - (rect.cx, rect.cy)
-    along, across = rect.axes
-    u, v = p @ along, p @ across
-    half_l, half_w = rect.length / 2, rect.width / 2
-    wall = FIXTURE_WALL + cell
-    best: LFit | None = None
-    for su in (1.0, -1.0):
-        for sv in (1.0, -1.0):
-            # Corner at (-su*half_l, -sv*half_w); local +x = su*along, local +y = sv*across.
-            lu, lv = su * u + half_l, sv * v + half_w  # distances from the corner's two sides
-            on = (lv <= wall) | (lu <= wall)
-            mismatch = float(1.0 - on.mean())
-            x_axis, y_axis = su * along, sv * across
-            if x_axis[0] * y_axis[1] - x_axis[1] * y_axis[0] < 0:  # a mirrored L cannot be the fixture
-                mismatch += 1.0
-            origin = (np.array([rect.cx, rect.cy]) - half_l * x_axis - half_w * y_axis
-                      + FIXTURE_ORIGIN_IN * (x_axis + y_axis))
-            yaw = math.atan2(float(x_axis[1]), float(x_axis[0]))
-            if best is None or mismatch < best.mismatch - 1e-9:
-                best = LFit(float(origin[0]), float(origin[1]), yaw, mismatch)
-    assert best is not None
-    return best
+    p = np.asarray(xy, dtype=np.float64)
+    overhang = cell / 2  # the outermost cells' centres lie about half a cell out of the faces
+    yaws = np.linspace(-math.pi, math.pi, _YAW_STEPS, endpoint=False)
+    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+    u = c * p[None, :, 0] + s * p[None, :, 1]  # (yaws, N): coordinates along the L's +x and +y
+    v = -s * p[None, :, 0] + c * p[None, :, 1]
+    u0 = u.min(axis=1, keepdims=True) + overhang + FIXTURE_ORIGIN_IN  # the origin's coordinates
+    v0 = v.min(axis=1, keepdims=True) + overhang + FIXTURE_ORIGIN_IN
+    cost = (_outside(u - u0, v - v0, 0.0) ** 2).sum(axis=1)
+    k = int(np.argmin(cost))
+    ox, oy = float(c[k, 0] * u0[k, 0] - s[k, 0] * v0[k, 0]), float(s[k, 0] * u0[k, 0] + c[k, 0] * v0[k, 0])
+
+    def total(q: np.ndarray) -> float:
+        return float((_outside(*_to_frame(p, q[0], q[1], q[2]), 0.0) ** 2).sum())
+
+    res = minimize(total, np.array([ox, oy, float(yaws[k])]), method="Nelder-Mead",
+                   options={"xatol": 1e-5, "fatol": 1e-12, "initial_simplex": np.array(
+                       [[ox, oy, yaws[k]], [ox + 0.005, oy, yaws[k]], [ox, oy + 0.005, yaws[k]],
+                        [ox, oy, yaws[k] + math.radians(2)]])})
+    x, y, yaw = (float(v) for v in res.x)
+    mismatch = float((_outside(*_to_frame(p, x, y, yaw), cell) > 0).mean())
+    return LFit(x, y, math.remainder(yaw, 2 * math.pi), mismatch)
 
 
-__all__ = ["LFit", "Rect", "cell_corners", "fit_l", "min_area_rect", "square_yaw"]
+def l_corners(fit: LFit) -> np.ndarray:
+    """The world corners (8, 2) of the fitted L's two walls (for its axis-aligned box)."""
+    out = []
+    c, s = math.cos(fit.yaw), math.sin(fit.yaw)
+    for wall in FIXTURE_WALLS:
+        (cx, cy, _), (hx, hy, _) = wall.centre, wall.half
+        for du, dv in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)):
+            u, v = cx + du, cy + dv
+            out.append((fit.x + c * u - s * v, fit.y + s * u + c * v))
+    return np.array(out)
+
+
+__all__ = ["LFit", "Rect", "cell_corners", "fit_l", "l_corners", "min_area_rect", "square_yaw"]

@@ -2,12 +2,17 @@
 
 The perceiver never sees the truth; benchmarks and tests hand it to :func:`score` as plain
 :class:`TrueObject` records, so this module needs no world either.  Detections and true objects
-are matched one-to-one by minimum total 3-D distance between centres (the Hungarian algorithm,
-:func:`scipy.optimize.linear_sum_assignment`), a pair counting only within :data:`GATE`: a
-detection farther than that from every object is a false positive, whatever its label, and an
-object with none that close is missed.  The distance is 3-D so that a block standing at a zone's
-centre, or on another block, is matched to itself and not to what lies under it.  Kind, colour and size are then compared on the matches
-only, so a confusion never hides as a miss.
+are matched one-to-one (the Hungarian algorithm, :func:`scipy.optimize.linear_sum_assignment`), a
+pair counting only within :data:`GATE` of 3-D distance between centres: a detection farther than
+that from every object is a false positive, whatever its label, and an object with none that
+close is missed.  Among the assignments within the gate, the matching takes, in this order, the
+most pairs, then the fewest pairs of different kinds, then the least total distance (each step's
+cost outweighs every sum of the next's).  Why kinds before distance: a fixture's reported
+position is its slot (0, 0, 0), so a block inserted there stands within the gate of the
+fixture's centre, and distance alone paired the two crosswise, scoring two kind / colour / size
+errors for two objects that were both seen.  The distance is 3-D so that a block standing at a
+zone's centre, or on another block, is matched to itself and not to what lies under it.  Kind,
+colour and size are then compared on the matches only, so a confusion never hides as a miss.
 
 Yaw errors respect symmetry: a square (block, zone) repeats every 90°, a fixture every 360°,
 and round objects (bowls, balls) have no yaw and no yaw error.
@@ -101,10 +106,15 @@ def score(detections: Sequence[Detection], truths: Sequence[TrueObject], gate: f
     if detections and truths:
         d = np.array([det.position for det in detections])
         t = np.array([tr.position for tr in truths])
-        cost = np.linalg.norm(t[:, None, :] - d[None, :, :], axis=-1)
-        rows, cols = linear_sum_assignment(np.where(cost <= gate, cost, 1e3))
+        dist = np.linalg.norm(t[:, None, :] - d[None, :, :], axis=-1)
+        other_kind = np.array([[tr.kind != det.kind for det in detections] for tr in truths])
+        pairs = min(len(truths), len(detections))
+        kind_cost = (pairs + 1) * gate  # more than any sum of in-gate distances
+        no_pair = (pairs + 1) * (kind_cost + gate)  # more than any sum of in-gate pair costs
+        cost = np.where(dist <= gate, dist + kind_cost * other_kind, no_pair)
+        rows, cols = linear_sum_assignment(cost)
         for i, j in zip(rows, cols):
-            if cost[i, j] > gate:
+            if dist[i, j] > gate:
                 continue
             tr, det = truths[i], detections[j]
             matches.append(Match(

@@ -12,8 +12,14 @@ its id while it is moved.  :class:`Tracker` does that without any simulator stat
 * a remembered block that is no longer seen, but lies under a block now seen (its footprint
   covers it, its top is no higher than that block's bottom), is *hidden in a tower*: it stays,
   at its remembered pose, marked not visible.  Top views cannot see it; memory can;
+* a remembered *fixed* object (zone, bowl, ball, fixture: welded to the world, the robot never
+  moves one) that is not seen whole, because something put on it cuts its top into pieces, is
+  *covered*: it stays at its remembered pose under its id, and the unmatched new detections of
+  its colour whose centres lie within its box are taken for its pieces, not new objects (a
+  block dropped on a fixture's corner broke it into two balls and a block of its colour, and the
+  plan's name for the fixture vanished);
 * new detections get fresh ids above every id used so far; remembered objects neither seen nor
-  hidden are dropped.
+  hidden nor covered are dropped.
 """
 
 from __future__ import annotations
@@ -60,6 +66,18 @@ def _moved(d: Detection, pos: Sequence[float]) -> Detection:
     return replace(d, position=tuple(float(v) for v in pos), aabb=box)  # type: ignore[arg-type]
 
 
+def _inside(d: Detection, box: tuple[tuple[float, float, float], tuple[float, float, float]]) -> bool:
+    """Whether ``d``'s centre lies within ``box`` in xy."""
+    (x0, y0, _), (x1, y1, _) = box
+    return x0 <= d.position[0] <= x1 and y0 <= d.position[1] <= y1
+
+
+def _pieces(fixed: Detection, detections: Sequence[Detection], free: set[int]) -> list[int]:
+    """The unmatched detections (indices in ``free``) that are pieces of the remembered fixed
+    object ``fixed``: its colour, centre within its box."""
+    return [j for j in sorted(free) if detections[j].color == fixed.color and _inside(detections[j], fixed.aabb)]
+
+
 def _covers(top: Detection, below: Detection) -> bool:
     """Whether ``top`` sits over ``below``: xy within its box (+1 cm), ``below``'s top under its bottom."""
     x, y, _ = below.position
@@ -101,12 +119,20 @@ class Tracker:
                 if cost[i, j] < 1e3:
                     pairs[int(j)] = int(i)
         seen_old = set(pairs.values())
-        kept: list[Tracked] = []
+        free = set(range(len(detections))) - set(pairs)
+        covered: list[Tracked] = []
+        for i, t in enumerate(old):
+            if i not in seen_old and t.detection.fixed:
+                pieces = _pieces(t.detection, detections, free)
+                if pieces:
+                    covered.append(Tracked(t.obj_id, t.detection, True))
+                    free -= set(pieces)
+        kept: list[Tracked] = list(covered)
         next_id = self.next_id
         for j, d in enumerate(detections):
             if j in pairs:
                 kept.append(Tracked(old[pairs[j]].obj_id, d, True))
-            else:
+            elif j in free:
                 kept.append(Tracked(next_id, d, True))
                 next_id += 1
         for i, t in enumerate(old):
