@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from functools import cache
 
 from capmj.confine.names import import_findings
+from capmj.errors import TaskError
 from capmj.generate.config import GENERATED_TAG
 from capmj.tasks.builtin import BENCHMARK_TAG, EXTENDED_TAG
 
@@ -38,8 +39,9 @@ _Binding = tuple[str, str | None]
 for a definition copied from ``module``."""
 
 
-class NotSelfContained(Exception):
-    """An example needs something that cannot be shown as allowed code (the reason is the message)."""
+class NotSelfContained(TaskError):
+    """A library task cannot be shown importing only the task API (the reason is the message);
+    it is then not offered as an example."""
 
 
 @dataclass(frozen=True)

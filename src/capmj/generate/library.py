@@ -51,7 +51,7 @@ def load_library() -> tuple[LibraryTask, ...]:
         module = sys.modules.get(type(task).__module__)
         try:
             example = self_contained(inspect.getsource(module)) if module is not None else ""
-        except (OSError, TypeError, SyntaxError, NotSelfContained):
+        except (OSError, TypeError, SyntaxError, NotSelfContained):  # shown only if it can be shown right
             example = ""
         out.append(LibraryTask(info.name, goal, summary, example[:MAX_SOURCE_CHARS]))
     return tuple(out)
