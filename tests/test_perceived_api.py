@@ -11,16 +11,21 @@ from capmj.agents.perceived import PerceivedAPI, make_api
 from capmj.agents.reference import ReferenceAgent
 from capmj.runner import run_episode
 from capmj.sim.world import World
-from capmj.tasks.protocol import make_scene
+from capmj.tasks.protocol import Scene, make_scene
 from capmj.tasks.registry import get_task
 
 
-def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_move() -> None:
-    task = get_task("stack-blocks-of-same-color")
-    scene = make_scene(task, 10003)
+def _perceived(name: str, seed: int) -> tuple[Scene, PerceivedAPI]:
+    """The seed's settled scene and its planner API in rgbd mode."""
+    task = get_task(name)
+    scene = make_scene(task, seed)
     world = World(scene.objects)
     world.settle()
-    api = PerceivedAPI(EpisodeContext(task, 10003, scene, world))
+    return scene, PerceivedAPI(EpisodeContext(task, seed, scene, world))
+
+
+def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_move() -> None:
+    scene, api = _perceived("stack-blocks-of-same-color", 10003)
     fns = api.functions()
     names = fns["get_obj_names"]()
     truth = Counter(o.name.rsplit(" with obj_id", 1)[0] for o in scene.objects)
@@ -39,11 +44,7 @@ def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_m
 def test_a_plans_reset_is_perceived_afresh() -> None:
     """After reset() the cameras see the initial scene again: the same names and positions as the
     first view, though the moved block was last perceived elsewhere."""
-    task = get_task("stack-blocks-of-same-color")
-    scene = make_scene(task, 10003)
-    world = World(scene.objects)
-    world.settle()
-    api = PerceivedAPI(EpisodeContext(task, 10003, scene, world))
+    _, api = _perceived("stack-blocks-of-same-color", 10003)
     fns = api.functions()
     names = fns["get_obj_names"]()
     block = next(n for n in names if n.startswith("movable"))
