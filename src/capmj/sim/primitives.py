@@ -17,7 +17,8 @@ import math
 import numpy as np
 
 from capmj.sim.carry import sloped_transit
-from capmj.sim.motion import Motion, MotionConfig, PrimitiveResult
+from capmj.sim.motion import Motion, PrimitiveResult
+from capmj.sim.motion_config import MotionConfig
 from capmj.sim.robot import CUP_RADIUS
 from capmj.sim.world import World
 
