@@ -313,7 +313,7 @@ class VLMReporter:
 
     def images(self, ctx: Any) -> tuple[bytes, bytes, bytes, np.ndarray, np.ndarray]:
         """PNG bytes of (initial RGB, final RGB, final depth colour map) and the raw final images."""
-        from capmj.sim.cameras import depth_to_visible, to_png
+        from capmj.sim.image_colour import depth_to_visible, to_png
 
         if self._initial is None:
             raise ConfigError(f"no initial image: {self._render_error or 'start() was not called'}")
