@@ -48,7 +48,8 @@ from capmj.agents.loop_policy import Outcome, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
 from capmj.agents.plan_check import plan_check
 from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
-from capmj.agents.reporter import Report, make_reporter
+from capmj.agents.reporter import make_reporter
+from capmj.agents.verdict import Report
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
 from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
