@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from capmj.agents.reporter import Report
+from capmj.agents.verdict import Report
 from capmj.agents.scene_facts import resolve_name
 from capmj.sim.objects import ObjectSpec
 

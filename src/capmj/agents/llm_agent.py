@@ -44,11 +44,12 @@ from capmj.agents.confidence import assess
 from capmj.agents.llm_meter import LLMMeter, check_limits
 from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
-from capmj.agents.loop_policy import Outcome, decide, judges_errors, wrong_share
+from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
 from capmj.agents.plan_check import plan_check
 from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
-from capmj.agents.reporter import Report, make_reporter
+from capmj.agents.reporter import make_reporter
+from capmj.agents.verdict import Report
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
 from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
@@ -143,19 +144,7 @@ class LLMAgent:
                 elif o.attempts > 1 and not isinstance(error, LLMError) and from_initial:
                     ends[k] = (ctx.checkpoint(), error)
                 last_error = error
-                checked = assess(report, ctx.world.objects) if report is not None else None
-                decision = decide(o.loop_policy, Outcome(
-                    not_run=outcome.not_run is not None, error=error is not None,
-                    verdict=report.verdict if report is not None else None, judged=report is not None,
-                    assessment=checked, wrong_share=wrong_share(checked, movable)),
-                    on_unknown=o.on_unknown, reset=from_initial)
-                rule = decision.rule
-                unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
-                if meter.exceeded is not None or isinstance(error, LLMError):
-                    rule = "llm_budget" if meter.exceeded is not None else "llm_error"
-                record = replace(record, on_unknown=o.on_unknown if unknown else None, rule=rule,
-                                 confidence=checked.confidence if checked is not None else None,
-                                 low_confidence=checked.why if checked is not None else None)
+                record, decision, rule = self._decide(ctx, record, error, report, outcome, movable, from_initial)
                 attempts.append(record)
                 self._record_attempt(ctx, record)
                 if meter.exceeded is not None:
@@ -175,10 +164,7 @@ class LLMAgent:
                     break
                 reset = decision.reset
                 if outcome.not_run is None:
-                    feedback = Feedback(attempt=k, completion=outcome.completion or "", code=outcome.code,
-                                        error=record.error, error_line=record.error_line,
-                                        report=report.text() if report is not None else "",
-                                        scene=self._scene_summary(ctx), from_initial=from_initial, reset=reset)
+                    feedback = self._feedback(ctx, record, report, outcome, from_initial=from_initial, reset=reset)
                     feedbacks.append(feedback)
                 elif feedback is not None and feedback.reset != reset:
                     feedback = replace(feedback, reset=reset)  # the next plan starts where this attempt left it
@@ -189,6 +175,35 @@ class LLMAgent:
             ctx.notes["llm_transcript"] = [c.to_dict() for c in transcript]  # plain data for logs
         if last_error is not None:
             raise last_error
+
+    def _decide(self, ctx: EpisodeContext, record: AttemptRecord, error: BaseException | None, report: Report | None,
+                outcome: PlanOutcome, movable: tuple[int, ...], from_initial: bool) -> tuple[AttemptRecord, Decision, str]:
+        """The loop policy's decision on an attempt, the rule that applies, and the attempt's record
+        completed with that rule (an LLM budget or error overrides the policy's), the unknown-verdict policy and
+        the reporter's confidence."""
+        o = self.options
+        checked = assess(report, ctx.world.objects) if report is not None else None
+        decision = decide(o.loop_policy, Outcome(
+            not_run=outcome.not_run is not None, error=error is not None,
+            verdict=report.verdict if report is not None else None, judged=report is not None,
+            assessment=checked, wrong_share=wrong_share(checked, movable)),
+            on_unknown=o.on_unknown, reset=from_initial)
+        rule = decision.rule
+        unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
+        if self.meter.exceeded is not None or isinstance(error, LLMError):
+            rule = "llm_budget" if self.meter.exceeded is not None else "llm_error"
+        record = replace(record, on_unknown=o.on_unknown if unknown else None, rule=rule,
+                         confidence=checked.confidence if checked is not None else None,
+                         low_confidence=checked.why if checked is not None else None)
+        return record, decision, rule
+
+    def _feedback(self, ctx: EpisodeContext, record: AttemptRecord, report: Report | None, outcome: PlanOutcome,
+                  *, from_initial: bool, reset: bool) -> Feedback:
+        """What the next plan is told of an attempt whose plan ran."""
+        return Feedback(attempt=record.attempt, completion=outcome.completion or "", code=outcome.code,
+                        error=record.error, error_line=record.error_line,
+                        report=report.text() if report is not None else "",
+                        scene=self._scene_summary(ctx), from_initial=from_initial, reset=reset)
 
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
                  reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback],

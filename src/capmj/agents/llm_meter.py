@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from capmj.errors import ConfigError, LLMBudgetExceeded
-from capmj.llm.client import _import_litellm
+from capmj.llm.provider import import_litellm
 from capmj.records import Spend, SpendLimits
 
 __all__ = ["LLMBudgetExceeded", "LLMMeter", "Price", "check_limit", "check_limits", "parse_price", "price_source"]
@@ -60,7 +60,7 @@ def price_source(model: str, declared: Price | None = None) -> str:
     if declared is not None:
         return "declared"
     try:
-        info = _import_litellm().get_model_info(model)
+        info = import_litellm().get_model_info(model)
     except Exception:  # noqa: BLE001 - litellm raises for models it does not list
         return "unknown"
     known = info.get("input_cost_per_token") is not None and info.get("output_cost_per_token") is not None

@@ -30,7 +30,7 @@ from capmj.agents.codeprep import (RESERVED, SANDBOX_GLOBALS, bound_names, funct
 from capmj.agents.prompt_files import (META, QUESTION, Example, PromptFile, load_prompt,
                                        load_system_prompt, object_names, prompts_dir)
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
-from capmj.agents.sandbox.runtime import WRITTEN_END, WRITTEN_START, located_error
+from capmj.agents.sandbox.located import WRITTEN_END, WRITTEN_START, located_error
 from capmj.errors import LLMError, PlanError, describe
 from capmj.record import NullRecorder, Recorder
 

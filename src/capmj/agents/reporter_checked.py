@@ -11,7 +11,7 @@ checking code agreed with the predicate on 43-55 % of attempts; deriving the fac
 failed, and a fact list (~150 characters per object) is also shorter than the 5.3 kB of
 ``parse_completion``'s examples.
 
-The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.reporter.parse_verdict`).
+The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.verdict.parse_verdict`).
 An answer without a verdict gets one repair request in the same conversation; still none: unknown.
 Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — no ``direct`` fallback,
 since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
@@ -23,7 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 from capmj.agents.lmp import LMPSession, prompts_dir
-from capmj.agents.reporter import Report, ask_verdict
+from capmj.agents.verdict import Report, ask_verdict
 from capmj.agents.scene_facts import facts_text, scene_facts, state_from_api
 from capmj.errors import ConfigError
 

@@ -48,7 +48,7 @@ from capmj.bench.rundir import RunDir
 from capmj.bench.transcripts import write_calls
 from capmj.bench.worker import AgentSpec, Job, Worker, init_pool_worker, run_pool_batch
 from capmj.errors import WorkerCrash, WorkerError, describe
-from capmj.llm import client
+from capmj.llm.gate import request_gate, set_request_gate
 from capmj.records import EpisodeRecord, EpisodeResult
 
 RECYCLE_LOGGING_WORKERS = 200
@@ -108,7 +108,7 @@ class LocalExecutor(RecordSink):
     def _run_here(self, jobs: list[Job]) -> None:
         """``workers=0``: run in this process (debugging, tests); the LLM gate is restored after."""
         gate = threading.BoundedSemaphore(self.max_llm_concurrency) if self.max_llm_concurrency else None
-        previous = client.request_gate()
+        previous = request_gate()
         worker = Worker(self.agent, self.registered, gate)
         try:
             for i in range(0, len(jobs), self.concurrency):
@@ -118,7 +118,7 @@ class LocalExecutor(RecordSink):
                 for job, rec in zip(batch, worker.run_batch(batch)):
                     self._emit(job, rec)
         finally:
-            client.set_request_gate(previous)
+            set_request_gate(previous)
             worker.close()
 
     def _run_pool(self, pending: deque[Job]) -> None:

@@ -19,7 +19,7 @@ from typing import Any, Mapping, Sequence
 from capmj.agents.factory import make_agent
 from capmj.bench.results import sanitize
 from capmj.errors import describe, error_facts
-from capmj.llm.client import set_request_gate
+from capmj.llm.gate import set_request_gate
 from capmj.records import EpisodeResult
 from capmj.tasks import registry
 
@@ -71,7 +71,7 @@ class Worker:
     ``registered`` holds tasks registered by hand in the parent (pickled), which a spawned process
     would not know.  ``llm_gate`` bounds the LLM requests in flight (``--max-llm-concurrency``): a
     process-shared semaphore across pool workers, a thread one in a Ray actor or in process; it is
-    handed to :mod:`capmj.llm.client`.
+    handed to :mod:`capmj.llm.gate`.
     """
 
     def __init__(self, spec: AgentSpec, registered: bytes | None = None, llm_gate: Any = None) -> None:

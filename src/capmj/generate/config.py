@@ -14,7 +14,7 @@ from typing import Literal
 
 from capmj.confine.manifest import GENERATED_TAG
 from capmj.errors import ConfigError
-from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.llm.config import DEFAULT_TIMEOUT_S
 from capmj.taskcheck import DEFAULT_ACCEPT_RATE, DEFAULT_SEEDS
 
 MODES = ("bottom-up", "top-down")

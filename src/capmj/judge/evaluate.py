@@ -28,7 +28,7 @@ from capmj.agents.reporter import REPORTER_PROMPTS, make_reporter
 from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.llm import LLMClient, LLMConfig
-from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.llm.config import DEFAULT_TIMEOUT_S
 from capmj.record import NullRecorder, Recorder
 from capmj.tasks.protocol import episode_rng
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-from capmj.agents.reporter import SOURCES
+from capmj.agents.verdict import SOURCES
 from capmj.bench.results import wilson
 
 __all__ = ["RECORD_FIELDS", "confusion", "group_metrics", "metrics"]

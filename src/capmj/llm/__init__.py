@@ -4,15 +4,10 @@ Importing this package is cheap: litellm (seconds to import) is loaded on the fi
 """
 
 from capmj.llm.cache import CompletionCache, cache_key
-from capmj.llm.client import (
-    CallRecord,
-    Completion,
-    LLMClient,
-    LLMConfig,
-    Usage,
-    image_part,
-    text_part,
-)
+from capmj.llm.client import LLMClient
+from capmj.llm.config import LLMConfig
+from capmj.llm.messages import image_part, text_part
+from capmj.llm.records import CallRecord, Completion, Usage
 
 __all__ = [
     "CallRecord",

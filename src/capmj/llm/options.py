@@ -12,7 +12,7 @@ import argparse
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
-from capmj.llm.client import DEFAULT_TIMEOUT_S
+from capmj.llm.config import DEFAULT_TIMEOUT_S
 
 
 @dataclass(frozen=True)

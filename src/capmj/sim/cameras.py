@@ -6,7 +6,9 @@ Nothing renders until asked (the oracle never does); the OpenGL context is creat
 render and shared by the whole process (see :mod:`capmj.sim.gl`).
 
 Per view two passes are drawn with shadows, reflections and multisampling off: a flat
-segmentation pass whose depth buffer gives the metric depth, and the shaded colour pass.
+segmentation pass whose depth buffer gives the metric depth, and the shaded colour pass.  What a
+render returns is :mod:`capmj.sim.camera_frames`; colouring it for display,
+:mod:`capmj.sim.image_colour`.
 
 Conventions
 -----------
@@ -26,110 +28,36 @@ Conventions
 
 from __future__ import annotations
 
-import io
 import os
 import re
 import weakref
-from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from capmj.errors import ConfigError, SimError
 from capmj.sim.bounds import WORKSPACE
+from capmj.sim.camera_frames import CameraFrame, Heightmap, Observation, frozen
 from capmj.sim.gl import make_current as gl_make_current
 from capmj.sim.gl import register_cleanup, shared_gl_context
+from capmj.sim.image_colour import depth_to_visible, seg_to_visible, to_png
 from capmj.sim.scene import HEIGHTMAP_CAMERA, HEIGHTMAP_PIXEL
+
+# Re-exported: the records a rig returns, and the colouring helpers that tests/test_cameras.py and
+# callers import from here.
+__all__ = ["IMAGE_H", "IMAGE_W", "VIEW_CAMERAS", "CameraFrame", "CameraRig", "Heightmap", "Observation",
+           "depth_to_visible", "seg_to_visible", "to_png"]
 
 VIEW_CAMERAS: tuple[str, ...] = ("front", "left", "right")
 """The perspective cameras of ``mjcf/table.xml`` in Ravens order (tests/test_mjcf.py keeps them equal):
 the one list of camera names; the recorder and the env default to it."""
 IMAGE_W, IMAGE_H = 640, 480
 """Default image size of the view cameras (RealSense-D415-like, as in Ravens)."""
-DEPTH_BACKGROUND = 4.99
-"""Depth at or beyond which :func:`depth_to_visible` treats a pixel as "nothing seen" (far plane 5 m)."""
 
 _GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 _OBJ_BODY = re.compile(r"^obj(\d+)$")
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
-
-
-@dataclass(frozen=True, eq=False)
-class CameraFrame:
-    """One rendered view (arrays are read-only)."""
-
-    name: str
-    rgb: np.ndarray
-    """uint8 (H, W, 3)."""
-    depth: np.ndarray
-    """float32 (H, W) metres along the optical axis."""
-    seg: np.ndarray | None
-    """int32 (H, W) object id per pixel, 0 = robot/table/background; None when not rendered."""
-    intrinsics: np.ndarray
-    """float64 (3, 3)."""
-    extrinsics: np.ndarray
-    """float64 (4, 4) camera-to-world, OpenCV camera axes."""
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.depth.shape  # type: ignore[return-value]
-
-    def unproject(self, rows: Any, cols: Any) -> np.ndarray:
-        """World points (N, 3) seen at integer pixels ``(rows, cols)``, using the rendered depth."""
-        v = np.atleast_1d(np.asarray(rows))
-        u = np.atleast_1d(np.asarray(cols))
-        d = self.depth[v, u].astype(np.float64)
-        k = self.intrinsics
-        cam = np.stack([(u + 0.5 - k[0, 2]) / k[0, 0] * d, (v + 0.5 - k[1, 2]) / k[1, 1] * d, d], axis=-1)
-        return cam @ self.extrinsics[:3, :3].T + self.extrinsics[:3, 3]
-
-    def project(self, points: Any) -> np.ndarray:
-        """Continuous pixel coordinates (N, 2) as (u, v) of world points; pixel index = floor."""
-        p = np.atleast_2d(np.asarray(points, dtype=np.float64))
-        r, t = self.extrinsics[:3, :3], self.extrinsics[:3, 3]
-        cam = (p - t) @ r
-        uv = cam[:, :2] / cam[:, 2:3]
-        return uv * np.diag(self.intrinsics)[:2] + self.intrinsics[:2, 2]
-
-
-@dataclass(frozen=True, eq=False)
-class Heightmap:
-    """Ravens-style top-down heightmap of the workspace (arrays are read-only)."""
-
-    height: np.ndarray
-    """float32 (320, 160) metres above the table, clipped at 0; rows = y ascending, cols = x ascending."""
-    colormap: np.ndarray
-    """uint8 (320, 160, 3) top-down colour."""
-    seg: np.ndarray
-    """int32 (320, 160) object ids."""
-    pixel_size: float
-    bounds: np.ndarray
-    """(3, 2) workspace bounds: rows x, y, z; columns min, max."""
-
-    def pixel_of(self, x: float, y: float) -> tuple[int, int]:
-        """(row, col) of the cell containing world point (x, y) (a point on a cell edge: the upper cell)."""
-        return (int(np.floor((y - self.bounds[1, 0]) / self.pixel_size + 1e-9)),
-                int(np.floor((x - self.bounds[0, 0]) / self.pixel_size + 1e-9)))
-
-    def xy_of(self, row: int, col: int) -> tuple[float, float]:
-        """World (x, y) of the centre of cell (row, col)."""
-        return (float(self.bounds[0, 0] + (col + 0.5) * self.pixel_size),
-                float(self.bounds[1, 0] + (row + 0.5) * self.pixel_size))
-
-
-@dataclass(frozen=True, eq=False)
-class Observation:
-    """Everything :meth:`CameraRig.render_all` renders."""
-
-    views: Mapping[str, CameraFrame]
-    heightmap: Heightmap | None
-    """None when :meth:`CameraRig.render_all` was asked not to render it."""
 
 
 def _geom_object_ids(model: mujoco.MjModel) -> np.ndarray:
@@ -217,7 +145,7 @@ class CameraRig:
         self._intrinsics: dict[str, np.ndarray] = {}
         for name, cid in self._cam_ids.items():
             fy = 0.5 * self.height / np.tan(np.radians(m.cam_fovy[cid]) / 2)
-            self._intrinsics[name] = _frozen(np.array([[fy, 0.0, self.width / 2], [0.0, fy, self.height / 2],
+            self._intrinsics[name] = frozen(np.array([[fy, 0.0, self.width / 2], [0.0, fy, self.height / 2],
                                                        [0.0, 0.0, 1.0]]))
 
     # ------------------------------------------------------------------ context
@@ -343,11 +271,11 @@ class CameraRig:
         depth = self._metric_depth(zbuf, orthographic=False)
         return CameraFrame(
             name=camera,
-            rgb=_frozen(np.ascontiguousarray(rgb[::-1])),
-            depth=_frozen(np.ascontiguousarray(depth[::-1])),
-            seg=None if ids is None else _frozen(np.ascontiguousarray(ids[::-1])),
+            rgb=frozen(np.ascontiguousarray(rgb[::-1])),
+            depth=frozen(np.ascontiguousarray(depth[::-1])),
+            seg=None if ids is None else frozen(np.ascontiguousarray(ids[::-1])),
             intrinsics=self._intrinsics[camera],
-            extrinsics=_frozen(self.extrinsics(camera)),
+            extrinsics=frozen(self.extrinsics(camera)),
         )
 
     def heightmap(self, *, include_robot: bool = True) -> Heightmap:
@@ -371,8 +299,8 @@ class CameraRig:
         height = np.maximum(cam_z - depth.astype(np.float64) - table_z, 0.0).astype(np.float32)
         # The camera looks down with image-up = +y, so the raw bottom-up GL rows are y ascending
         # (Ravens convention) and columns are x ascending: no flip.
-        return Heightmap(height=_frozen(height), colormap=_frozen(rgb), seg=_frozen(seg),
-                         pixel_size=self.pixel_size, bounds=_frozen(self.bounds.copy()))
+        return Heightmap(height=frozen(height), colormap=frozen(rgb), seg=frozen(seg),
+                         pixel_size=self.pixel_size, bounds=frozen(self.bounds.copy()))
 
     def render_all(self, *, include_robot: bool = True, seg: bool = True, heightmap: bool = True) -> Observation:
         """The three perspective views and the heightmap.
@@ -384,74 +312,3 @@ class CameraRig:
         views = MappingProxyType({name: self.render(name, seg=seg) for name in self.camera_names})
         return Observation(views=views,
                            heightmap=self.heightmap(include_robot=include_robot) if heightmap else None)
-
-
-# ---------------------------------------------------------------------- visualisation helpers
-_VIRIDIS_ANCHORS = np.array([
-    [68, 1, 84], [71, 44, 122], [59, 82, 139], [44, 113, 142], [33, 145, 140],
-    [39, 173, 129], [92, 200, 99], [170, 220, 50], [253, 231, 37]], dtype=np.float64)
-_VIRIDIS = np.stack([np.interp(np.linspace(0, 1, 256), np.linspace(0, 1, len(_VIRIDIS_ANCHORS)),
-                               _VIRIDIS_ANCHORS[:, c]) for c in range(3)], axis=1).round().astype(np.uint8)
-"""256-entry viridis approximation (9 anchors, linear in between)."""
-_INVALID_RGB = np.array([40, 40, 40], np.uint8)
-
-
-def depth_to_visible(depth: np.ndarray, near: float | None = None, far: float | None = None, *,
-                     background: float = DEPTH_BACKGROUND) -> np.ndarray:
-    """Colour a depth image (metres) with viridis: near = bright yellow, far = dark blue-purple.
-
-    ``near``/``far`` default to the 1st/99th percentiles of the valid pixels, so the table and the
-    objects use the whole colour range.  Pixels that are non-finite or at/after ``background`` are
-    dark grey.  Returns uint8 (H, W, 3).  ``near > far`` is allowed (e.g. for heights:
-    ``depth_to_visible(hm.height, near=0.1, far=0.0)`` makes tall things bright).
-    """
-    d = np.asarray(depth, dtype=np.float64)
-    valid = np.isfinite(d) & (d < background)
-    out = np.empty(d.shape + (3,), np.uint8)
-    out[:] = _INVALID_RGB
-    if not valid.any():
-        return out
-    vals = d[valid]
-    lo = float(np.percentile(vals, 1)) if near is None else float(near)
-    hi = float(np.percentile(vals, 99)) if far is None else float(far)
-    span = hi - lo if hi != lo else 1e-6
-    t = np.clip((vals - lo) / span, 0.0, 1.0)
-    out[valid] = _VIRIDIS[np.round((1.0 - t) * 255).astype(np.int64)]
-    return out
-
-
-def seg_to_visible(seg: np.ndarray) -> np.ndarray:
-    """Colour an object-id image: 0 black, every id its own fixed bright colour. uint8 (H, W, 3)."""
-    ids = np.asarray(seg, dtype=np.int64)
-    golden = (ids * 0.61803398875) % 1.0  # well-spread hues for consecutive ids
-    h6 = golden * 6.0
-    x = 1.0 - np.abs(h6 % 2.0 - 1.0)
-    sector = np.floor(h6).astype(np.int64) % 6
-    c, z = np.ones_like(x), np.zeros_like(x)
-    table = [(c, x, z), (x, c, z), (z, c, x), (z, x, c), (x, z, c), (c, z, x)]
-    rgb = np.zeros(ids.shape + (3,))
-    for k, (r, g, b) in enumerate(table):
-        sel = sector == k
-        rgb[sel] = np.stack([r[sel], g[sel], b[sel]], axis=-1)
-    out = (55 + 200 * rgb).astype(np.uint8)
-    out[ids == 0] = 0
-    return out
-
-
-def to_png(array: np.ndarray) -> bytes:
-    """Encode a uint8 image (H, W), (H, W, 3) or (H, W, 4) as PNG bytes (Pillow).
-
-    Float depth images must be coloured first with :func:`depth_to_visible`.
-    """
-    from PIL import Image
-
-    a = np.asarray(array)
-    if a.dtype == np.bool_:
-        a = a.astype(np.uint8) * 255
-    if a.dtype != np.uint8:
-        raise ConfigError(f"to_png needs a uint8 image, got {a.dtype}; colour depth with depth_to_visible()")
-    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))):
-        raise ConfigError(f"to_png needs an (H, W), (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(a)).save(buf, format="PNG")
-    return buf.getvalue()

@@ -13,11 +13,13 @@ a tall tower elsewhere), the carry rises on a slope instead, clearing what it pa
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from capmj.sim.carry import sloped_transit
-from capmj.sim.motion import Motion, MotionConfig, PrimitiveResult
+from capmj.sim.motion import Motion, PrimitiveResult
+from capmj.sim.motion_config import MotionConfig
 from capmj.sim.robot import CUP_RADIUS
 from capmj.sim.world import World
 
@@ -30,6 +32,30 @@ YAW_QUARTER_TURNS = range(-4, 5)
 """Quarter turns tried around the current yaw when choosing a pick yaw: up to a full turn either
 way, so every tool yaw equivalent for the round cup within the wrist's reach is a candidate (the
 nearest to the current yaw wins a tie)."""
+
+
+@dataclass(frozen=True)
+class _Failure:
+    """Why a step of the primitive ended it: the result's status, the gripped object, the message."""
+
+    status: str
+    obj: int | None
+    message: str
+
+
+@dataclass(frozen=True, eq=False)
+class _Carry:
+    """Where a gripped object is carried: computed once the grip holds (step 2), followed by the
+    carry (step 3) and the retreat (step 4)."""
+
+    tip: np.ndarray      # tip position after the grip
+    hang: float          # m from the tip down to the carried object's bottom
+    transit: float       # tip height at which the carried object clears every object
+    yaw: float           # tool yaw at the pick
+    new_yaw: float       # tool yaw at the place (the object turned to its place yaw)
+    offset: np.ndarray   # the object's centre relative to the tip
+    tip_xy: np.ndarray   # tip xy over the place point
+    down: np.ndarray     # where the guarded descent over the place point ends
 
 
 def _wrap(a: float, period: float) -> float:
@@ -124,7 +150,7 @@ class Primitives:
         object's centre height; the descent still stops at first contact).  ``place_yaw`` is the
         object's final yaw (blocks are symmetric every 90°), None to keep its orientation.
         """
-        w, m, cfg = self.world, self.motion, self.cfg
+        w = self.world
         steps0, t0 = w.steps, w.time
         pick = np.asarray(pick, float)
         place = np.asarray(place, float)
@@ -138,12 +164,26 @@ class Primitives:
 
         if w.suction.held is not None:
             w.suction.release()
+        gripped = self._grip(pick, pick_t)
+        if isinstance(gripped, _Failure):
+            return result(gripped.status, gripped.obj, gripped.message)
+        obj, yaw = gripped
+        carry = self._plan_carry(obj, yaw, place, place_yaw)
+        place_z = self._carry(obj, carry, pick, place_t)
+        if isinstance(place_z, _Failure):
+            return result(place_z.status, place_z.obj, place_z.message)
+        self._release_and_retreat(place_z, carry.new_yaw)
+        return result("ok", obj)
+
+    def _grip(self, pick: np.ndarray, pick_t: tuple[float, float, float]) -> _Failure | tuple[int, float]:
+        """Step 1: up to the transit height, over and down onto the pick point until the cup
+        touches, grip; (the gripped object, the tool yaw), or why not."""
+        w, m, cfg = self.world, self.motion, self.cfg
         transit = self.transit_height()
-        # 1. up, over, and down onto the pick point
         tip = w.tip_pose()[0]
         if tip[2] < transit - AT_HEIGHT_TOL:
             if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
-                return result("unreachable", None, "cannot rise to transit height")
+                return _Failure("unreachable", None, "cannot rise to transit height")
         m.unwind_wrist()
         yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
         over_pick = np.array([pick[0], pick[1], transit])
@@ -152,20 +192,23 @@ class Primitives:
         status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
                                         stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
         if status == "unreachable" and (leg == 0 or m.move_to(over_pick, yaw)[0] == "unreachable"):
-            return result("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
+            return _Failure("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         obj = w.suction.grip()
         if obj is None:
             m.move_to(over_pick, yaw)
-            return result("no_grip", None, "descended to the pick point without touching a movable object")
+            return _Failure("no_grip", None, "descended to the pick point without touching a movable object")
         w.step(cfg.grip_dwell_steps)
+        return obj, yaw
 
-        # 2. lift high enough that the carried object clears everything, then carry
+    def _plan_carry(self, obj: int, yaw: float, place: np.ndarray, place_yaw: float | None) -> _Carry:
+        """Step 2: how high the gripped object must be lifted to clear everything, and where the
+        tip goes so that the object's centre ends at ``place``, turned to ``place_yaw``."""
+        w, cfg = self.world, self.cfg
         obj_pose = w.pose(obj)
         tip = w.tip_pose()[0]
         hang = tip[2] - (obj_pose.pos[2] - w.objects_by_id[obj].half_extents[2])
         transit = self.transit_height(exclude=obj, hang=hang)
         delta = 0.0 if place_yaw is None else _wrap(place_yaw - obj_pose.yaw, _QUARTER)
-        new_yaw = yaw + delta
         offset = np.asarray(obj_pose.pos) - tip  # object centre relative to the tip
         c, s = math.cos(delta), math.sin(delta)
         offset_xy = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
@@ -176,7 +219,16 @@ class Primitives:
             centre_z = self.coarse_top_under(place[:2], exclude=obj) + w.objects_by_id[obj].half_extents[2]
         tip_z = centre_z - offset[2]
         down = np.array([tip_xy[0], tip_xy[1], tip_z - cfg.overshoot])
-        # 3. lift, carry and go down until the carried object touches (one move, corners rounded)
+        return _Carry(tip=tip, hang=hang, transit=transit, yaw=yaw, new_yaw=yaw + delta, offset=offset,
+                      tip_xy=tip_xy, down=down)
+
+    def _carry(self, obj: int, carry: _Carry, pick: np.ndarray, place_t: tuple[float, float, float]
+               ) -> _Failure | float:
+        """Step 3: lift, carry and go down until the carried object touches (one move, corners
+        rounded; on a slope where the lift straight up is out of reach); the tip height over the
+        place point, where the retreat rises back to, or why not (the object then put back)."""
+        w, m, cfg = self.world, self.motion, self.cfg
+        tip, transit, yaw, new_yaw, tip_xy, down = carry.tip, carry.transit, carry.yaw, carry.new_yaw, carry.tip_xy, carry.down
         placed = w.suction.held_touches_other
         place_z = transit  # the tip height over the place point, where the retreat rises back to
         legs = [(np.array([tip[0], tip[1], transit]), yaw), (np.array([tip_xy[0], tip_xy[1], transit]), new_yaw),
@@ -187,9 +239,9 @@ class Primitives:
             # Out of reach straight up: only what the carry passes over needs clearing (the carried
             # object's footprint around the tip), on a slope between the highest reachable heights.
             lo, hi = w.aabb(obj)
-            radius = float(np.linalg.norm(offset[:2])) + float(np.linalg.norm(hi[:2] - lo[:2])) / 2
+            radius = float(np.linalg.norm(carry.offset[:2])) + float(np.linalg.norm(hi[:2] - lo[:2])) / 2
             sloped = sloped_transit(w, m.ik, tip[:2], tip_xy, yaw, radius, transit, cfg.min_transit_z,
-                                    cfg.clearance + hang, obj)
+                                    cfg.clearance + carry.hang, obj)
             if sloped is not None:
                 *via, above = sloped  # up at the pick point, then rising along the way; above the place point
                 place_z = float(above[2])
@@ -202,16 +254,19 @@ class Primitives:
         if status == "unreachable":
             self._put_back(pick, yaw)
             if leg < lifts:
-                return result("unreachable", obj, "cannot lift to transit height")
-            return result("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
-        # 4. release, retreat, settle
+                return _Failure("unreachable", obj, "cannot lift to transit height")
+            return _Failure("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
+        return place_z
+
+    def _release_and_retreat(self, place_z: float, yaw: float) -> None:
+        """Step 4: let go, rise and let the objects come to rest."""
+        w, m, cfg = self.world, self.motion, self.cfg
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         # Retreat straight up, on to the height the next primitive starts its transit at: one
         # vertical move instead of a retreat that stops and a rise that starts again.
         tip = w.tip_pose()[0]
         up = min(place_z, tip[2] + cfg.retreat)
-        if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), new_yaw)[0] == "unreachable":
-            m.move_to(np.array([tip[0], tip[1], up]), new_yaw)
+        if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), yaw)[0] == "unreachable":
+            m.move_to(np.array([tip[0], tip[1], up]), yaw)
         w.settle(cfg.settle_steps, cfg.settle_tol)
-        return result("ok", obj)

@@ -33,10 +33,11 @@ from __future__ import annotations
 from capmj.agents.sandbox.checks import FORBIDDEN_ATTRIBUTES, FORBIDDEN_NAMES, check_code
 from capmj.agents.sandbox.extract import extract_code
 from capmj.agents.sandbox.facades import PROVIDED_NAMES
-from capmj.agents.sandbox.runtime import SandboxBudget, run_code
+from capmj.agents.sandbox.runtime import run_code
 
 # Public and importable from here, but (as before the split into a package) not in __all__.
-from capmj.agents.sandbox.runtime import MAX_INT_BITS as MAX_INT_BITS
+from capmj.agents.sandbox.session import MAX_INT_BITS as MAX_INT_BITS
+from capmj.agents.sandbox.session import SandboxBudget
 
 __all__ = ["FORBIDDEN_ATTRIBUTES", "FORBIDDEN_NAMES", "PROVIDED_NAMES", "SandboxBudget", "check_code",
            "extract_code", "run_code"]

@@ -8,7 +8,7 @@ a fresh curated dict per run so tampering cannot leak between runs.  ``np.random
 the generator the caller passes (the episode's), never from numpy's global state, so the same
 code gives the same numbers in every process; ``set``/``frozenset`` are insertion-ordered
 (:mod:`capmj.agents.sandbox.ordered`) and ``type(x)`` answers with one argument only.  The builders take the run's
-session (:class:`~capmj.agents.sandbox.runtime._Session`) as a parameter, so this module does
+session (:class:`~capmj.agents.sandbox.session._Session`) as a parameter, so this module does
 not import the runtime and there is no import cycle.
 """
 
@@ -30,7 +30,7 @@ from capmj.agents.sandbox.ordered import OrderedFrozenSet, OrderedSet
 from capmj.agents.sandbox.ravens_utils import utils_members
 
 if TYPE_CHECKING:
-    from capmj.agents.sandbox.runtime import _Session
+    from capmj.agents.sandbox.session import _Session
 
 _MAX_PRINT_CHARS = 1_000_000
 
