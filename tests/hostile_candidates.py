@@ -1,7 +1,7 @@
 """A corpus of hostile generated-task modules, one door to the operating system each (issue #25).
 
 Every entry is the good candidate ``good_zone_color.py`` with a few lines added — after its
-imports (they run while the checks load it) or at the top of ``generate()`` (they run during the
+imports (they run while the checks load it) or at the top of ``sample_scene()`` (they run during the
 ``scenes`` check).  Each door, if it were open, leaves a trace the caller can look for: a file
 named ``MARKER`` (or the file ``VICTIM`` gone), or a connection to the TCP port ``PORT``.  These
 are fixtures for tests and for ``benchmarks/confinement.py``, never results.
@@ -22,7 +22,7 @@ from typing import Any
 GOOD = Path(__file__).resolve().parent / "generator_candidates" / "good_zone_color.py"
 NAME = "put-blocks-in-zone-of-same-color"
 _AFTER_IMPORTS = "from capmj.tasks.spawn import Spawner, pick_colors\n"
-_GENERATE = "    def generate(self, rng: np.random.Generator) -> Scene:\n"
+_SAMPLE_SCENE = "    def sample_scene(self, rng: np.random.Generator) -> Scene:\n"
 
 
 @dataclass(frozen=True)
@@ -39,9 +39,9 @@ class Hostile:
         lines = (self.code.replace("MARKER", str(marker)).replace("VICTIM", str(victim))
                  .replace("PORT", str(port)))
         src = GOOD.read_text(encoding="utf-8")
-        if self.where == "generate":
+        if self.where == "sample_scene":
             body = "".join(f"        {ln}\n" for ln in lines.splitlines())
-            return src.replace(_GENERATE, _GENERATE + body)
+            return src.replace(_SAMPLE_SCENE, _SAMPLE_SCENE + body)
         return src.replace(_AFTER_IMPORTS, _AFTER_IMPORTS + lines + "\n")
 
 
@@ -63,8 +63,8 @@ CORPUS: tuple[Hostile, ...] = (
             "capmj.tasks.registry", ("subprocess.Popen",)),
     Hostile("raw-os-open-write", "file", _TYPING_OS + '_fd = _os.open("MARKER", _os.O_WRONLY | _os.O_CREAT)\n'
             '_os.write(_fd, b"owned")', "typing.sys", ("open",)),
-    Hostile("in-generate", "process", 'import typing\ntyping.sys.modules["os"].system("touch MARKER")',
-            "typing.sys", ("os.system",), where="generate"),
+    Hostile("in-sample-scene", "process", 'import typing\ntyping.sys.modules["os"].system("touch MARKER")',
+            "typing.sys", ("os.system",), where="sample_scene"),
     Hostile("import-os", "process", 'import os\nos.system("touch MARKER")', "import of 'os'", ("os.system",)),
     Hostile("dunder-import", "process", '__import__("os").system("touch MARKER")', "'__import__'", ("os.system",)),
     Hostile("print-self-builtins", "process", 'print.__self__.__import__("os").system("touch MARKER")',

@@ -41,8 +41,8 @@ class WithPlan:
     def tags(self) -> Any:
         return self.base.tags
 
-    def generate(self, rng):
-        return self.base.generate(rng)
+    def sample_scene(self, rng):
+        return self.base.sample_scene(rng)
 
     def oracle_goals(self, scene):
         return self.base.oracle_goals(scene)

@@ -184,7 +184,7 @@ class CrashTask:
     name = "test-crash-task"
     tags = frozenset({"test"})
 
-    def generate(self, rng):
+    def sample_scene(self, rng):
         os.kill(os.getpid(), signal.SIGKILL)
 
     def oracle_goals(self, scene):

@@ -102,7 +102,7 @@ def test_write_detection_reads_modes_and_flags():
 
 
 # --------------------------------------------------------------------------------------- runtime layer
-RUNTIME_SAMPLE = ("registry-os-system", "in-generate", "raw-os-open-write", "remove-victim", "socket-connect",
+RUNTIME_SAMPLE = ("registry-os-system", "in-sample-scene", "raw-os-open-write", "remove-victim", "socket-connect",
                   "ctypes-libc-system", "import-module-new", "os-fork", "atexit-deferred", "patch-trusted-runner",
                   "exec-spoofed-filename")
 """One module per door class (the full corpus runs in ``benchmarks/confinement.py``)."""
@@ -118,7 +118,7 @@ def test_runtime_guard_alone_stops_the_door_and_records_the_event(hostile_id, tm
     assert run.ended.startswith("refused by the runtime guard")
     failed = [r for r in run.results if r.outcome != "pass"]
     assert failed[0].outcome == "error" and "refused by the runtime guard" in failed[0].detail
-    if hostile.where == "generate":
+    if hostile.where == "sample_scene":
         assert failed[0].name == "scenes"
 
 

@@ -21,8 +21,8 @@ from capmj.generate import GenerateConfig, Limits, generate
 from capmj.generate.cli import main as cli_main
 from capmj.generate.package import TEST_FILE
 from capmj.generate.static import extract_code, static_checks
-from generator_script import GeneratorScript, candidate
-from llm_stub_server import StubLLMServer
+from generator_script import GeneratorScript, ScriptedCandidate, candidate
+from llm_stub_server import StubLLMServer, iter_prompts
 from venvs import make_venv, pip_install
 
 PACKAGE = "capmj-generated-test"
@@ -54,7 +54,7 @@ def test_static_checks_reject_without_running():
     assert static_checks("from ..x import y\n")[1].outcome == "fail"
     bad = static_checks("import numpy as np\ndef f(rng):\n    return open('/etc/passwd').read()\n")
     assert bad[2].outcome == "fail" and "'open'" in bad[2].detail
-    rnd = static_checks("import numpy as np\ndef generate(rng: np.random.Generator):\n    return np.random.rand()\n")
+    rnd = static_checks("import numpy as np\ndef sample_scene(rng: np.random.Generator):\n    return np.random.rand()\n")
     assert rnd[2].outcome == "fail" and "np.random.rand" in rnd[2].detail
     assert static_checks("x = (\n")[0].outcome == "fail"
     ok = static_checks("from __future__ import annotations\nimport math\nfrom capmj.tasks.spawn import Spawner\n")
@@ -180,6 +180,28 @@ def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
     assert not marker.exists()  # the edited module never ran
 
 
+def test_generator_asks_for_sample_scene_and_refuses_the_old_name_naming_the_new_one(tmp_path):
+    """A candidate that writes the deprecated ``generate`` fails ``protocol`` in the worker; the
+    repair turn tells the model to rename it (here the scripted repair does not, so it is rejected)."""
+    good = candidate("good_zone_color.py", name=GOOD)
+    old = good.code.replace("def sample_scene(", "def generate(")
+    assert old != good.code
+    script = GeneratorScript([ScriptedCandidate("old_name.py", GOOD, good.goal, "static:protocol", old, old)])
+    with StubLLMServer(responder=script) as server:
+        result = generate(config(server, tmp_path, "out", mode="top-down", name=GOOD, seeds=1,
+                                 description="Put every block in the zone of its color."))
+        system = str(server.requests[0]["messages"][0]["content"])
+        repair = [r for r in iter_prompts(server) if "was rejected by the check" in r]
+    assert "sample_scene(self, rng) -> Scene" in system and "generate(self, rng)" not in system
+    rec = result.records[0]
+    assert not rec.accepted and rec.stage == "static" and rec.repaired
+    first = checks_of(rec, attempt=1)
+    assert first["load"]["outcome"] == "pass" and first["protocol"]["outcome"] == "fail"
+    assert "rename it to 'sample_scene'" in first["protocol"]["detail"]
+    assert len(repair) == 1 and "rename it to 'sample_scene'" in repair[0]
+    assert rec.reason.startswith("static check protocol failed after the repair round") and "sample_scene" in rec.reason
+
+
 def test_broken_candidates_rejected_at_their_stage(tmp_path, monkeypatch):
     monkeypatch.setenv("CAPMJ_MARKER_DIR", str(tmp_path))  # broken_import_os would create 'ran' here
     files = ["broken_import_os.py", "broken_open_call.py", "broken_solved_at_reset.py", "broken_wrong_zone.py",
@@ -218,7 +240,7 @@ def test_broken_candidates_rejected_at_their_stage(tmp_path, monkeypatch):
     assert "Rejected candidates" in (out / "README.md").read_text()
 
 
-def test_endless_generate_killed_by_cpu_limit_and_recorded(tmp_path):
+def test_endless_sample_scene_killed_by_cpu_limit_and_recorded(tmp_path):
     c = candidate("broken_while_true.py")
     with StubLLMServer(responder=GeneratorScript([c])) as server:
         result = generate(config(server, tmp_path, "out", limits=Limits(cpu_s=3, wall_s=120)))

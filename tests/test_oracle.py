@@ -43,7 +43,7 @@ class _BrokenTask:
     name = "broken-task"
     tags = frozenset()
 
-    def generate(self, rng):  # noqa: ANN001
+    def sample_scene(self, rng):  # noqa: ANN001
         raise ZeroDivisionError("generator bug")
 
     def oracle_goals(self, scene: Scene):  # noqa: ANN201

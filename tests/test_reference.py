@@ -38,8 +38,8 @@ class _Plugin:
     def __init__(self, base, plan):
         self._base, self.reference_plan, self.name, self.tags = base, plan, base.name, base.tags
 
-    def generate(self, rng):
-        return self._base.generate(rng)
+    def sample_scene(self, rng):
+        return self._base.sample_scene(rng)
 
     def oracle_goals(self, scene):
         return self._base.oracle_goals(scene)

@@ -89,7 +89,7 @@ class PutBlockInZone:
     def __init__(self, name: str = "put-block-in-zone", tags: frozenset[str] = frozenset({"demo"})) -> None:
         self.name, self.tags = name, tags
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         zone_color, block_color = pick_colors(rng, 2)
         sp = Spawner(rng)
         zone = sp.zone(zone_color)
@@ -120,6 +120,26 @@ def make_generated() -> PutBlockInZone:
     return PutBlockInZone("put-block-in-zone-generated", frozenset({"demo", "generated"}))
 '''
 
+LEGACY_MODULE = DEMO_MODULE.replace("def sample_scene(", "def generate(").replace(
+    'name: str = "put-block-in-zone"', 'name: str = "put-block-in-zone-legacy"')
+"""The demo task as a plugin written before ``generate`` was renamed ``sample_scene`` (issue #28)."""
+assert LEGACY_MODULE.count("def generate(") == 1 and "def sample_scene(" not in LEGACY_MODULE
+
+BOTH_MODULE = '''
+from legacy_tasks.zone import PutBlockInZone
+
+
+class HalfMigrated(PutBlockInZone):
+    __doc__ = PutBlockInZone.__doc__
+
+    def sample_scene(self, rng):
+        return super().generate(rng)
+
+
+TASK = HalfMigrated("put-block-in-zone-both")
+'''
+"""A plugin half way through the rename: both names, as different methods."""
+
 PACKAGES: dict[str, tuple[str, str, dict[str, str], dict[str, str]]] = {
     # key: (distribution, version, entry points, {module path: source})
     "demo": ("capmj-demo-tasks", "0.3.1",
@@ -130,9 +150,12 @@ PACKAGES: dict[str, tuple[str, str, dict[str, str], dict[str, str]]] = {
                {"exploding-task": "broken_tasks.boom:TASK", "misnamed-task": "broken_tasks.bad:TASK"},
                {"broken_tasks/boom.py": 'raise ImportError("needs libfoo, which is not installed")\n',
                 "broken_tasks/bad.py": "class Bad:\n    name = 'other-name'\n    tags = frozenset()\n"
-                                       "    def generate(self, rng): ...\n\nTASK = Bad()\n"}),
+                                       "    def sample_scene(self, rng): ...\n\nTASK = Bad()\n"}),
     "dup": ("capmj-dup-tasks", "1.0.0", {"stack-all-blocks-on-a-zone": "dup_tasks.clone:TASK"},
             {"dup_tasks/clone.py": "TASK = None\n"}),
+    "legacy": ("capmj-legacy-tasks", "0.2.0",
+               {"put-block-in-zone-legacy": "legacy_tasks.zone:TASK", "put-block-in-zone-both": "legacy_tasks.both:TASK"},
+               {"legacy_tasks/zone.py": LEGACY_MODULE, "legacy_tasks/both.py": BOTH_MODULE}),
 }
 
 
@@ -250,7 +273,7 @@ def test_register_validates_and_works_with_plugins_disabled(monkeypatch):
     assert registry.resolve("generated") == ["put-block-in-zone-generated"]
     with pytest.raises(PluginError, match="already exists"):
         registry.register(ns["make_generated"]())
-    undocumented = type("Undocumented", (), {"name": "x", "tags": frozenset(), "generate": len,
+    undocumented = type("Undocumented", (), {"name": "x", "tags": frozenset(), "sample_scene": len,
                                              "oracle_goals": len, "evaluate": len})()
     with pytest.raises(PluginError, match="Task Description:, Randomizations:, Success Conditions:"):
         registry.register(undocumented)
@@ -283,6 +306,42 @@ def test_third_party_package_runs_through_the_registry(sites):
     assert out["demo"] == ["put-block-in-zone", "put-block-in-zone-generated"]
     assert out["generated"] == sorted(CAPMJ_GENERATED + ["put-block-in-zone-generated"])
     assert out["factory_tags"] == ["demo", "generated"]
+
+
+def test_plugin_written_before_the_rename_loads_and_runs_with_one_warning(sites):
+    """A third-party package whose task defines only ``generate``: the same scenes as the renamed
+    demo task, an oracle episode it solves, one DeprecationWarning naming the new method and
+    pointing at the plugin's file; a task defining both names differently is a PluginError."""
+    out = run("""
+        import json, warnings
+        from capmj.agents.oracle import OracleAgent
+        from capmj.errors import PluginError, TaskError
+        from capmj.runner import run_episode
+        from capmj.tasks import registry
+        from capmj.tasks.protocol import make_scene
+        legacy, demo = registry.get_task("put-block-in-zone-legacy"), registry.get_task("put-block-in-zone")
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            same = [make_scene(legacy, s) == make_scene(demo, s) for s in (7, 8, 9)]
+            episode = run_episode(legacy, 10001, OracleAgent())
+        deps = [w for w in got if issubclass(w.category, DeprecationWarning)]
+        try:
+            registry.get_task("put-block-in-zone-both")
+            both = None
+        except PluginError as e:
+            both = {"text": str(e), "task_error": isinstance(e, TaskError)}
+        print(json.dumps({"same": same, "success": episode.success, "error": episode.error,
+                          "warnings": [[str(w.message), w.filename] for w in deps], "both": both,
+                          "broken": sorted(registry.broken())}))
+    """, sites["legacy"], sites["demo"])
+    assert out["same"] == [True, True, True]
+    assert (out["success"], out["error"]) == (True, None)
+    [(message, filename)] = out["warnings"]
+    assert "PutBlockInZone defines 'generate(rng)'" in message and "rename it to 'sample_scene(rng)'" in message
+    assert filename.endswith(os.path.join("legacy_tasks", "zone.py"))
+    both = out["both"]
+    assert both is not None and both["task_error"] and "capmj-legacy-tasks 0.2.0" in both["text"]
+    assert "both 'sample_scene' and 'generate'" in both["text"] and out["broken"] == ["put-block-in-zone-both"]
 
 
 def test_broken_plugin_is_reported_and_others_still_work(sites):

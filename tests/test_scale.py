@@ -202,11 +202,11 @@ class CrashOnceTask:
         self.marker = marker
         self.inner = get_task(TASK)
 
-    def generate(self, rng):
+    def sample_scene(self, rng):
         if not os.path.exists(self.marker):
             Path(self.marker).write_text("crashed once")
             os.kill(os.getpid(), signal.SIGKILL)
-        return self.inner.generate(rng)
+        return self.inner.sample_scene(rng)
 
     def oracle_goals(self, scene):
         return self.inner.oracle_goals(scene)

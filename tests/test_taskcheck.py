@@ -58,6 +58,23 @@ def test_required_name_and_tags_are_protocol():
     assert "entry point is called 'other'" in report.results[0].detail and "'x'" in report.results[0].detail
 
 
+def test_the_old_scene_method_name_passes_for_plugins_and_fails_where_refused(tmp_path):
+    """An installed plugin still named ``generate`` passes (with a note naming the new method);
+    with ``allow_deprecated=False`` (the generator's worker) the protocol check fails saying so."""
+    code = (CANDIDATES / "good_zone_color.py").read_text().replace("def sample_scene(", "def generate(")
+    path = tmp_path / "old_name.py"
+    path.write_text(code)
+    spec = importlib.util.spec_from_file_location("cand_old_name", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    with pytest.warns(DeprecationWarning, match="sample_scene"):
+        allowed = check_task(module.TASK, CheckConfig.first(2), checks=("protocol", "scenes"))
+    assert allowed.passed and "deprecated: 'generate' is the old name of 'sample_scene'" in allowed.results[0].detail
+    refused = check_task(module.TASK, CheckConfig.first(2, allow_deprecated=False), checks=("protocol", "scenes"))
+    assert [r.outcome for r in refused.results] == ["fail", "skip"]
+    assert "defines 'generate(self, rng)' but no 'sample_scene(self, rng)'" in refused.results[0].detail
+
+
 def test_cli_checks_an_installed_task_with_physics():
     r = subprocess.run([sys.executable, "-m", "capmj.tasks", "check", "stack-all-blocks-on-a-zone", "--seeds", "1",
                         "--json"], capture_output=True, text=True, timeout=300)

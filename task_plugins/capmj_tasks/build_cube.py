@@ -39,7 +39,7 @@ class BuildCube(BenchTask):
     name = "build-cube"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         zc, bc = pick_colors(rng, 2)
         sp = Spawner(rng)
         zone = sp.zone(zc)

@@ -43,7 +43,7 @@ class BuildRectangularPyramid(BenchTask):
     name = "build-rectangular-pyramid"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         zc, bc = pick_colors(rng, 2)
         sp = Spawner(rng)
         zone = sp.zone(zc, scale=ZONE_SCALE)

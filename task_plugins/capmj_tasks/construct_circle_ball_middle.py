@@ -41,7 +41,7 @@ class ConstructCircleBallMiddle(CircleTask):
     def radius(self, n: int) -> float:
         return ring_radius(n, min_radius=RING_MIN_RADIUS)
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         bc, c1, c2 = pick_colors(rng, 3)
         reach = self.radius(2 * PER_COLOUR) + BLOCK
         sp = Spawner(rng)

@@ -90,7 +90,7 @@ class ConstructCircleWithBlocks(CircleTask):
 
     name = "construct-circle-with-blocks"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         zc, c1, c2 = pick_colors(rng, 3)
         n = int(rng.integers(4, 7))
         sp = Spawner(rng)

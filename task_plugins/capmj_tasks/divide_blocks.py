@@ -34,7 +34,7 @@ class DivideBlocks(BenchTask):
     name = "divide-blocks"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         n = int(rng.integers(7, 9))
         k = int(rng.integers(2, 4))
         sizes = P.group_sizes(n, k)

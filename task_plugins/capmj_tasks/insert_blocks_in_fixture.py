@@ -59,7 +59,7 @@ class InsertBlocksInFixture(BenchTask):
     name = "insert-blocks-in-fixture"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         nf = int(rng.integers(2, 5))
         n = 3 * nf
         k = int(rng.integers(3, min(n, 6) + 1))

@@ -40,7 +40,7 @@ class MaxOddNumberBlocksInSameColorZone(BenchTask):
     name = "max-odd-number-blocks-in-same-color-zone"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         while True:
             counts = [int(v) for v in rng.integers(1, MAX_PER_COLOR + 1, 3)]
             if 7 <= sum(counts) <= 14 and any(c % 2 == 0 for c in counts):

@@ -19,7 +19,7 @@ class AreaMoveTask(BenchTask):
 
     by_size = False
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         q = P.QUADRANTS
         i1, i2 = (int(v) for v in rng.choice(len(q), size=2, replace=False))
         area1, area2 = q[i1], q[i2]

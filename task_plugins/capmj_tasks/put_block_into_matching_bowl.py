@@ -55,7 +55,7 @@ class PutBlockIntoMatchingBowl(BenchTask):
 
     name = "put-block-into-matching-bowl"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         k = int(rng.integers(2, 4))
         m = int(rng.integers(2, k + 1))
         distractor_block = bool(rng.integers(0, 2))

@@ -56,7 +56,7 @@ class PutBlockIntoMismatchingBowl(BenchTask):
 
     name = "put-block-into-mismatching-bowl"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         k = int(rng.integers(2, 4))
         m = int(rng.integers(2, k + 1))
         distractor_block = bool(rng.integers(0, 2))

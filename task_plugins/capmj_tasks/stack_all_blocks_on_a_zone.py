@@ -30,7 +30,7 @@ class StackAllBlocksOnAZone(BenchTask):
 
     name = "stack-all-blocks-on-a-zone"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         sp = Spawner(rng)
         zc, dc = pick_colors(rng, 2)
         zone = sp.zone(zc)

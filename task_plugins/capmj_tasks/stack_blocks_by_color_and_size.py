@@ -36,7 +36,7 @@ class StackBlocksByColorAndSize(SelectedStackTask):
 
     name = "stack-blocks-by-color-and-size"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         size = ("big", "small")[int(rng.integers(0, 2))]
         temp = ("warm", "cool")[int(rng.integers(0, 2))]
         sel_pool = WARM_COLORS if temp == "warm" else COOL_COLORS

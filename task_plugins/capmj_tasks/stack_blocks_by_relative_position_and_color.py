@@ -47,7 +47,7 @@ class StackBlocksByRelativePositionAndColor(SelectedStackTask):
 
     name = "stack-blocks-by-relative-position-and-color"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         sp = Spawner(rng)
         zone = sp.zone(pick_color(rng))
         n = int(rng.integers(4, 8))

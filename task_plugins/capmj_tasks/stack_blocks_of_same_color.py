@@ -33,7 +33,7 @@ class StackBlocksOfSameColor(BenchTask):
 
     name = "stack-blocks-of-same-color"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         sp = Spawner(rng)
         k = int(rng.integers(1, 4))
         has_dz = bool(rng.integers(0, 2))

@@ -31,7 +31,7 @@ class StackBlocksOfSameSize(BenchTask):
 
     name = "stack-blocks-of-same-size"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         sp = Spawner(rng)
         c1, c2, c3 = pick_colors(rng, 3)
         z1, z2, z3 = sp.zone(c1), sp.zone(c2), sp.zone(c3)

@@ -31,7 +31,7 @@ class StackBlocksWithAlternateColor(BenchTask):
 
     name = "stack-blocks-with-alternate-color"
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         zc, dc, c2, c3 = pick_colors(rng, 4)
         sp = Spawner(rng)
         zone, dzone = sp.zone(zc), sp.zone(dc)

@@ -31,7 +31,7 @@ class StackMostColorBlock(SelectedStackTask):
     name = "stack-most-color-block"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         while True:
             k = int(rng.integers(3, 6))
             top = int(rng.integers(MAJORITY[0], MAJORITY[1] + 1))

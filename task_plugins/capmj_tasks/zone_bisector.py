@@ -61,7 +61,7 @@ class ZoneBisector(BenchTask):
     name = "zone-bisector"
     tags = EXTENDED
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         n = int(rng.integers(4, 7))
         zc = pick_colors(rng, 2)
         zone_r = ObjectSpec(1, "zone", zc[0], (0.0, 0.0, 0.0)).footprint_radius

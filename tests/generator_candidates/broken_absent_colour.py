@@ -29,7 +29,7 @@ class PutBlocksInZoneOfSameColor:
     name = "put-blocks-in-zone-of-same-color"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         k = int(rng.integers(2, 4))
         cols = pick_colors(rng, k)
         sp = Spawner(rng)

@@ -29,7 +29,7 @@ class PutBlocksInZoneOfSameColor:
     name = "put-blocks-in-zone-of-same-color"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         cols = ["red", "blue"]
         zones = [ObjectSpec(i + 1, "zone", c, (0.35, -0.3 + 0.6 * i, 0.0005)) for i, c in enumerate(cols)]
         blocks = [ObjectSpec(i + 3, "block", c, (0.6, -0.2 + 0.4 * i, 0.02), size="small") for i, c in enumerate(cols)]

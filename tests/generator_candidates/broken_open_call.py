@@ -1,6 +1,6 @@
 # expect: static:names
 # goal: Put every block in the zone of its color.
-"""Broken: reads a file inside generate."""
+"""Broken: reads a file inside sample_scene."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ class PutBlocksInZoneOfSameColor:
     name = "put-blocks-in-zone-of-same-color"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         k = int(open('/etc/hostname').read().count('a') % 2 + 2)
         cols = pick_colors(rng, k)
         sp = Spawner(rng)

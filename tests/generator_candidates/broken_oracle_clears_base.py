@@ -30,7 +30,7 @@ class StackSmallBlockOnBigBlock:
     name = "stack-small-block-on-big-block"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         c1, c2, c3 = pick_colors(rng, 3)
         sp = Spawner(rng)
         big = sp.block(c1, "big")

@@ -1,6 +1,6 @@
 # expect: runtime:scenes
 # goal: Put every block in the zone of its color.
-"""Broken: generate never returns."""
+"""Broken: sample_scene never returns."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ class PutBlocksInZoneOfSameColor:
     name = "put-blocks-in-zone-of-same-color"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         k = 2
         while True:
             k = (k * 7 + 1) % 5

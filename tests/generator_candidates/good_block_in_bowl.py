@@ -30,7 +30,7 @@ class PutNamedBlockInNamedBowl:
     name = "put-named-block-in-named-bowl"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         cols = pick_colors(rng, 5)
         sp = Spawner(rng)
         bowls = [sp.bowl(c) for c in cols[:2]]

@@ -29,7 +29,7 @@ class StackSmallOnBigInZone:
     name = "stack-small-on-big-in-zone"
     tags = frozenset({"generated-by-llm"})
 
-    def generate(self, rng: np.random.Generator) -> Scene:
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
         z, c1, c2, c3 = pick_colors(rng, 4)
         sp = Spawner(rng)
         zone = sp.zone(z)

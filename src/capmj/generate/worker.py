@@ -93,7 +93,8 @@ def main(argv: list[str] | None = None) -> int:
             _emit(out, {"result": CheckResult(LOAD, "error", detail[:500], data={"traceback": _tb_tail()}).to_dict()})
             return 0
         _emit(out, {"result": CheckResult(LOAD, "pass", "module imported, TASK found").to_dict()})
-        cfg = CheckConfig(tuple(int(s) for s in args.seeds.split(",")), args.accept_rate, args.name, frozenset(args.tag))
+        cfg = CheckConfig(tuple(int(s) for s in args.seeds.split(",")), args.accept_rate, args.name, frozenset(args.tag),
+                          allow_deprecated=False)  # a task written now uses today's protocol names
         check_task(task, cfg, on_start=start, on_result=lambda r: _emit(out, {"result": r.to_dict()}))
     return 0
 

@@ -10,7 +10,9 @@ Checks, in order (a check runs only when every check before it passed; the rest 
 
 ``protocol``
     :func:`capmj.tasks.registry.validate_task` (attributes, methods, the three-part docstring),
-    the entry-point name if given, and any tags the caller requires.
+    the entry-point name if given, and any tags the caller requires.  A task that still names its
+    scene method ``generate`` passes with a note, unless the caller refuses deprecated names
+    (the generator does: what it writes today must not be born deprecated).
 ``scenes``
     the same seed gives the same scene twice; different seeds do not all give one scene;
     ``scene.info`` is JSON; ``oracle_goals`` returns :class:`OracleGoal` steps whose targets lie
@@ -46,6 +48,7 @@ from capmj.taskcheck.report import CHECKS, CheckResult, Report
 from capmj.tasks.predicates import ravens_reward
 from capmj.tasks.protocol import OracleGoal, Scene, Task, make_scene
 from capmj.tasks.registry import validate_task
+from capmj.tasks.scene_method import DEPRECATED_SCENE_METHOD, SCENE_METHOD, uses_deprecated_name
 
 DEFAULT_SEEDS = 5
 DEFAULT_ACCEPT_RATE = 0.8
@@ -59,12 +62,14 @@ _TARGET_MARGIN = 0.01
 @dataclass(frozen=True)
 class CheckConfig:
     """How hard to check: ``seeds`` distinct scene seeds, the oracle's minimum success share,
-    the entry-point ``name`` the task must carry (None: any) and tags it must have."""
+    the entry-point ``name`` the task must carry (None: any), tags it must have, and whether a
+    protocol name kept only for old plugins (``generate`` for ``sample_scene``) is accepted."""
 
     seeds: tuple[int, ...] = tuple(range(DEFAULT_SEEDS))
     accept_rate: float = DEFAULT_ACCEPT_RATE
     name: str | None = None
     required_tags: frozenset[str] = frozenset()
+    allow_deprecated: bool = True
 
     def __post_init__(self) -> None:
         if not self.seeds or len(set(self.seeds)) != len(self.seeds):
@@ -127,7 +132,7 @@ def _scenes(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str
     for s in cfg.seeds:
         a, b = make_scene(task, s), make_scene(task, s)
         if not isinstance(a, Scene):
-            return "", {}, [f"generate returned {type(a).__name__}, not a Scene"]
+            return "", {}, [f"{SCENE_METHOD} returned {type(a).__name__}, not a Scene"]
         if a != b:
             problems.append(f"seed {s} gave two different scenes")
         scenes[s] = a
@@ -147,7 +152,7 @@ def _scenes(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[str
                     problems.append(f"seed {s}: oracle target {tuple(round(v, 3) for v in t.pos)} is outside the workspace")
     layouts = {tuple((o.kind, o.color, o.pos) for o in sc.objects) for sc in scenes.values()}
     if len(cfg.seeds) > 1 and len(layouts) == 1:
-        problems.append(f"all {len(cfg.seeds)} seeds gave the same scene (generate ignores its rng)")
+        problems.append(f"all {len(cfg.seeds)} seeds gave the same scene ({SCENE_METHOD} ignores its rng)")
     goal_texts = sorted({sc.goal for sc in scenes.values()})
     return f"{len(cfg.seeds)} seeds, {len(layouts)} distinct layouts", {"goals": goal_texts[:5]}, problems
 
@@ -223,8 +228,14 @@ def _protocol(task: Task, cfg: CheckConfig) -> tuple[str, dict[str, Any], list[s
     missing = sorted(cfg.required_tags - set(tags)) if isinstance(tags, (set, frozenset)) else []
     if missing:
         problems.append(f"its tags lack {', '.join(map(repr, missing))}")
-    return "attributes, methods and the three-part docstring", {"name": getattr(task, "name", None),
-                                                                "tags": sorted(map(str, tags or ()))}, problems
+    detail = "attributes, methods and the three-part docstring"
+    if uses_deprecated_name(task):
+        rename = f"'{DEPRECATED_SCENE_METHOD}' is the old name of '{SCENE_METHOD}': rename it to '{SCENE_METHOD}'"
+        if cfg.allow_deprecated:
+            detail += f" (deprecated: {rename})"
+        else:
+            problems.append(f"it defines '{DEPRECATED_SCENE_METHOD}(self, rng)' but no '{SCENE_METHOD}(self, rng)'; {rename}")
+    return detail, {"name": getattr(task, "name", None), "tags": sorted(map(str, tags or ()))}, problems
 
 
 _RUNNERS: dict[str, Callable[..., tuple[str, dict[str, Any], list[str]]]] = {

@@ -1,4 +1,4 @@
-"""What a task is: a plain object with a seeded scene generator, oracle goals and a success predicate.
+"""What a task is: a plain object with a seeded scene sampler, oracle goals and a success predicate.
 
 Tasks never subclass the world.  A task object is anything with the attributes of :class:`Task`;
 built-in and third-party tasks are found through the ``capmj.tasks`` entry-point group.  The
@@ -17,18 +17,19 @@ import numpy as np
 from capmj.errors import TaskError
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.state import SceneState
+from capmj.tasks.scene_method import scene_sampler
 
 MAX_RESAMPLES = 1000
 
 
 class Resample(Exception):
-    """Raised by a scene generator when this draw cannot be placed; the caller draws again from
-    the same generator stream, so a seed still maps to exactly one scene."""
+    """Raised by a task's ``sample_scene`` when this draw cannot be placed; the caller draws again
+    from the same generator stream, so a seed still maps to exactly one scene."""
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A generated episode layout.
+    """A sampled episode layout.
 
     ``goal`` is derived from ``objects`` (never a template with stale colours); ``info`` holds the
     task's own JSON-serialisable facts (target zone id, selected block ids, initial positions…)
@@ -100,8 +101,11 @@ class Task(Protocol):
     name: str
     tags: frozenset[str]
 
-    def generate(self, rng: np.random.Generator) -> Scene:
-        """Sample one scene; may raise :class:`Resample`."""
+    def sample_scene(self, rng: np.random.Generator) -> Scene:
+        """Sample one scene from ``rng`` alone; may raise :class:`Resample`.
+
+        Called ``generate`` before issue #28; a task that still defines only that name runs, with a
+        ``DeprecationWarning`` (:mod:`capmj.tasks.scene_method`)."""
         ...
 
     def oracle_goals(self, scene: Scene) -> Sequence[OracleGoal]:
@@ -124,11 +128,16 @@ def episode_rng(seed: int, stream: str = "scene") -> np.random.Generator:
 
 
 def make_scene(task: Task, seed: int) -> Scene:
-    """The scene of (task, seed): draws until the generator accepts, from one seeded stream."""
+    """The scene of (task, seed): samples until the task accepts a draw, from one seeded stream.
+
+    Raises :class:`TaskError` when the task has no usable scene method (see
+    :func:`~capmj.tasks.scene_method.scene_sampler`) or places no scene in :data:`MAX_RESAMPLES` draws.
+    """
+    sample = scene_sampler(task)
     rng = episode_rng(seed)
     for _ in range(MAX_RESAMPLES):
         try:
-            return task.generate(rng)
+            return sample(rng)
         except Resample:
             continue
     raise TaskError(f"task {task.name!r} could not place a scene for seed {seed} in {MAX_RESAMPLES} draws")

@@ -18,6 +18,9 @@ Why it works this way:
   has the keyword ``generated-by-llm``) is re-checked before it is imported: unchanged since
   acceptance and passing the static confinement check (:mod:`capmj.confine.manifest`), else a
   :class:`~capmj.errors.ConfinementError` and nothing of it runs.
+* A task written before ``generate`` became ``sample_scene`` still loads (it warns when it first
+  samples a scene); one defining both as different methods is a :class:`PluginError`
+  (:mod:`capmj.tasks.scene_method` says why).
 * ``CAPMJ_DISABLE_PLUGINS=1`` turns discovery off (hermetic tests, notebooks); then only tasks
   added with :func:`register` exist.
 """
@@ -39,6 +42,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 from capmj.confine.manifest import confinement_problems
 from capmj.errors import ConfigError, ConfinementError, PluginError
 from capmj.tasks.builtin import RENAMED_TAGS
+from capmj.tasks.scene_method import SCENE_METHOD, scene_method_problem, uses_deprecated_name
 
 if TYPE_CHECKING:  # the protocol pulls in numpy and the simulator; listing must stay cheap
     from capmj.tasks.protocol import Task
@@ -48,7 +52,9 @@ DISABLE_ENV = "CAPMJ_DISABLE_PLUGINS"
 DOC_PARTS = ("Task Description", "Randomizations", "Success Conditions")
 REGISTERED = "<registered>"
 """The ``distribution`` of tasks added with :func:`register`."""
-_METHODS = ("generate", "oracle_goals", "evaluate")
+_METHODS = ("oracle_goals", "evaluate")
+"""The protocol's methods besides ``sample_scene``, whose rules (it has a deprecated old name) are
+in :mod:`capmj.tasks.scene_method`."""
 
 
 @dataclass(frozen=True)
@@ -96,6 +102,9 @@ def validate_task(task: Any, name: str | None = None) -> list[str]:
     tags = getattr(task, "tags", None)
     if not isinstance(tags, AbstractSet) or not all(isinstance(t, str) for t in tags):
         problems.append(f"'tags' must be a (frozen)set of str, got {tags!r}")
+    scene = scene_method_problem(task)
+    if scene is not None:
+        problems.append(scene)
     for m in _METHODS:
         if not callable(getattr(task, m, None)):
             problems.append(f"'{m}' is missing or not callable")
@@ -110,7 +119,8 @@ def _instantiate(obj: Any) -> Any:
     """An entry's target: a class or a zero-argument function is called, a task object kept."""
     if inspect.isclass(obj):
         return obj()
-    if not all(hasattr(obj, m) for m in _METHODS) and callable(obj):
+    has_methods = all(hasattr(obj, m) for m in _METHODS) and (hasattr(obj, SCENE_METHOD) or uses_deprecated_name(obj))
+    if not has_methods and callable(obj):
         return obj()
     return obj
 
