@@ -41,6 +41,21 @@ def test_rgbd_names_describe_the_true_objects_and_perception_reruns_after_each_m
     assert lo == pytest.approx(hi, abs=0.004)  # the upper block is perceived resting on the lower one
 
 
+@pytest.mark.parametrize(
+    ("task", "seed"),
+    [("stack-blocks-by-relative-position-and-color", 10003), ("put-block-into-matching-bowl", 10001)],
+)
+def test_rgbd_ids_number_fixed_objects_first_like_the_state_api(task: str, seed: int) -> None:
+    """Every task spawns its fixed objects first, so the state API and the prompt examples number
+    zones and bowls 1, 2, ...; the perceiver must follow that convention (a 1.5B planner copied
+    'fixed green zone with obj_id 1' from the examples, an unknown object when blocks came first)."""
+    scene, api = _perceived(task, seed)
+    names = api.functions()["get_obj_names"]()
+    state_kinds = [o.name.split(" ", 1)[0] for o in sorted(scene.objects, key=lambda o: o.obj_id)]
+    assert [n.split(" ", 1)[0] for n in names] == state_kinds
+    assert [int(n.rsplit(" ", 1)[1]) for n in names] == list(range(1, len(names) + 1))
+
+
 def test_a_plans_reset_is_perceived_afresh() -> None:
     """After reset() the cameras see the initial scene again: the same names and positions as the
     first view, though the moved block was last perceived elsewhere."""

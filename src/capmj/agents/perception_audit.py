@@ -31,7 +31,7 @@ from capmj.perception.score import Score, TrueObject, score
 from capmj.perception.track import Tracked, Tracker
 from capmj.record import MatchStatus, PerceivedBox, PerceptionViews
 from capmj.records import PerceptionCall, PerceptionNotes
-from capmj.records.perception import POSITION_TOL_MM
+from capmj.records.perception import POSITION_TOL_MM, SLOT_TOL_MM
 
 __all__ = ["NOTES_KEY", "PerceptionAudit", "footprint_box", "perceived_boxes", "true_objects"]
 
@@ -59,7 +59,7 @@ def _call(attempt: int, stage: str, figures: dict[str, Any]) -> PerceptionCall:
         missed=figures["n_true"] - figures["matched"], false_detections=figures["n_detected"] - figures["matched"],
         kind_errors=figures["kind_errors"], color_errors=figures["color_errors"], size_errors=figures["size_errors"],
         median_pos_mm=_mm(figures["median_pos_mm"]), max_pos_mm=_mm(figures["max_pos_mm"]),
-        max_yaw_deg=_mm(figures["max_yaw_deg"]))
+        max_yaw_deg=_mm(figures["max_yaw_deg"]), max_slot_mm=_mm(figures["max_slot_mm"]))
 
 
 def _mm(v: float | None) -> float | None:
@@ -88,7 +88,8 @@ def perceived_boxes(tracked: Sequence[Tracked], s: Score, true_ids: Sequence[int
         m = by_det.get(j)
         status: MatchStatus = "false"
         if m is not None:
-            right = m.kind_ok and m.color_ok and m.size_ok and 1000 * m.position_error <= POSITION_TOL_MM
+            right = (m.kind_ok and m.color_ok and m.size_ok and 1000 * m.position_error <= POSITION_TOL_MM
+                     and (m.slot_error is None or 1000 * m.slot_error <= SLOT_TOL_MM))
             status = "right" if right else "wrong"
         centre, half, yaw = footprint_box(t.detection)
         out.append(PerceivedBox(t.obj_id, t.name, centre, half, yaw, float(t.detection.confidence), t.visible,

@@ -23,7 +23,8 @@ documented with examples in ``docs/failures.md``; in short:
    ``reporter_false_positive`` when the reporter's "achieved" ended the loop with attempts left,
    ``perception`` when the episode read the cameras and the last attempt acted on a view that got
    an object wrong or picked off target (:meth:`capmj.records.PerceptionNotes.erred`: a missed or
-   false object, a wrong kind / colour / size, a centre more than 10 mm off),
+   false object, a wrong kind / colour / size, a centre more than 10 mm off, a fixture slot
+   more than 3 mm off),
    ``physics`` when an object the last attempt placed ended more than :data:`DRIFT_TOL_M` from
    where its pick-and-place put it (a tower fell, a block slid off), else ``wrong_plan``.
 

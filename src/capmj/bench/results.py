@@ -186,7 +186,8 @@ def perception_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
 
     ``reset`` pools each episode's first view (the scene as it starts), ``after_moves`` every view
     taken after a pick-and-place: objects, missed and false objects, kind / colour / size errors,
-    the median of the views' median position errors and the largest error (mm).  ``erred`` counts
+    the median of the views' median position errors and the largest error (mm), the largest
+    fixture slot error (mm; None without a fixture).  ``erred`` counts
     the episodes whose last attempt acted on a wrong view or picked off target
     (:meth:`~capmj.records.PerceptionNotes.erred`), ``pick_misses`` those picks.
     """
@@ -197,11 +198,13 @@ def perception_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
     def pooled(calls: Sequence[Any]) -> dict[str, Any]:
         medians = sorted(c.median_pos_mm for c in calls if c.median_pos_mm is not None)
         maxima = [c.max_pos_mm for c in calls if c.max_pos_mm is not None]
+        slots = [c.max_slot_mm for c in calls if c.max_slot_mm is not None]
         return {"views": len(calls), "objects": sum(c.objects for c in calls),
                 "missed": sum(c.missed for c in calls), "false": sum(c.false_detections for c in calls),
                 "kind_errors": sum(c.kind_errors for c in calls), "color_errors": sum(c.color_errors for c in calls),
                 "size_errors": sum(c.size_errors for c in calls),
-                "median_pos_mm": _median(medians), "max_pos_mm": max(maxima) if maxima else None}
+                "median_pos_mm": _median(medians), "max_pos_mm": max(maxima) if maxima else None,
+                "max_slot_mm": max(slots) if slots else None}
 
     notes = [r.perception for r in eps if r.perception is not None]
     return {

@@ -39,7 +39,8 @@ def error_line(call: PerceptionCall) -> str:
     return (f"attempt {call.attempt} {call.stage}: {call.detections} detections of {call.objects} objects, "
             f"missed {call.missed}, false {call.false_detections}, errors kind {call.kind_errors} "
             f"colour {call.color_errors} size {call.size_errors}, position median {num(call.median_pos_mm, 'mm')} "
-            f"max {num(call.max_pos_mm, 'mm')}, yaw max {num(call.max_yaw_deg, 'deg')}")
+            f"max {num(call.max_pos_mm, 'mm')}, yaw max {num(call.max_yaw_deg, 'deg')}"
+            + ("" if call.max_slot_mm is None else f", fixture slot max {num(call.max_slot_mm, 'mm')}"))
 
 
 def log_perception(rr: Any, rec: Any, call: PerceptionCall, boxes: Sequence[PerceivedBox]) -> None:

@@ -7,10 +7,13 @@
 Everything is deterministic numpy/scipy on the CPU: the same images give the same detections
 in any process, with no random state at all.
 
-Detections come in a stable order that depends only on what is seen: by kind (the catalogue's
-order), then by position along x, then y, rounded to 5 mm so that a millimetre of noise does not
-reorder two objects; ids assigned in this order are therefore stable across re-renders of one
-scene.
+Detections come in a stable order that depends only on what is seen: fixed objects first, then
+movable ones (every task spawns its zones, bowls, balls and fixtures before its blocks, so the
+state API and every prompt example number fixed objects first; a small planner model copies
+``'fixed green zone with obj_id 1'`` from the examples, and numbering blocks first made that an
+unknown object in rgbd mode only); within each group by kind (the catalogue's order), then by
+position along x, then y, rounded to 5 mm so that a millimetre of noise does not reorder two
+objects; ids assigned in this order are therefore stable across re-renders of one scene.
 """
 
 from __future__ import annotations
@@ -31,8 +34,8 @@ class Perceiver(Protocol):
     def perceive(self, bundle: RGBDBundle) -> tuple[Detection, ...]: ...
 
 
-def _order(d: Detection) -> tuple[int, int, int]:
-    return (KINDS.index(d.kind), round(d.position[0] / 0.005), round(d.position[1] / 0.005))
+def _order(d: Detection) -> tuple[bool, int, int, int]:
+    return (not d.fixed, KINDS.index(d.kind), round(d.position[0] / 0.005), round(d.position[1] / 0.005))
 
 
 @dataclass(frozen=True)

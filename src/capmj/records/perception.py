@@ -13,11 +13,11 @@ pools the calls per task.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from capmj.records.codec import from_plain, to_plain
 
-__all__ = ["POSITION_TOL_MM", "PerceptionCall", "PerceptionNotes"]
+__all__ = ["POSITION_TOL_MM", "SLOT_TOL_MM", "PerceptionCall", "PerceptionNotes"]
 
 POSITION_TOL_MM = 10.0
 """A perceived centre farther than this from the true one is an error that can fail an episode:
@@ -25,12 +25,25 @@ the suction cup lands off a tiny block's 2 cm top and places land a centimetre o
 The built-in perceiver's worst error at reset over 20 tasks x 20 seeds is 2.8 mm
 (``benchmarks/results/perception.json``)."""
 
+SLOT_TOL_MM = 3.0
+"""A fixture whose perceived pose puts one of its slot centres farther than this from the true one
+is an error that can fail an episode: it is the walls' clearance around a block lowered exactly at
+its slot (``capmj.sim.objects.FIXTURE_CLEARANCE``, whose docstring says what a block lowered
+off it does; records sit below ``sim``, so ``tests/test_perception_slots.py`` holds the two
+equal).  A yaw error alone can do it: 2 a sin(err / 2) at pitch a = 4 cm is 3.5 mm at 5°, while
+the fixture's reported position (slot (0, 0, 0)) stays within :data:`POSITION_TOL_MM`."""
+
 
 @dataclass(frozen=True)
 class PerceptionCall:
     """One perception call: the planner API's objects matched to the true ones
     (:func:`capmj.perception.score.score`).  ``stage`` is ``reset`` or ``move N`` (after the N-th
-    pick-and-place of the attempt); errors in millimetres and degrees, None without a match."""
+    pick-and-place of the attempt); errors in millimetres and degrees, None without a match.
+    ``max_slot_mm`` is the worst slot-centre error of the matched fixtures
+    (:func:`capmj.perception.score.slot_error`), None without one; lines written before it was
+    recorded read as None (not measured), so their ``erred`` is what it was when they were labelled."""
+
+    DEFAULT_IF_MISSING: ClassVar[frozenset[str]] = frozenset({"max_slot_mm"})
 
     attempt: int
     stage: str
@@ -44,12 +57,16 @@ class PerceptionCall:
     median_pos_mm: float | None = None
     max_pos_mm: float | None = None
     max_yaw_deg: float | None = None
+    max_slot_mm: float | None = None
 
     @property
     def erred(self) -> bool:
-        """Whether this call got an object wrong enough to fail a plan acting on it."""
+        """Whether this call got an object wrong enough to fail a plan acting on it: a missed or
+        false object, a wrong kind / colour / size, a centre more than :data:`POSITION_TOL_MM`
+        off, or a fixture slot more than :data:`SLOT_TOL_MM` off."""
         wrong = self.missed + self.false_detections + self.kind_errors + self.color_errors + self.size_errors
-        return wrong > 0 or (self.max_pos_mm is not None and self.max_pos_mm > POSITION_TOL_MM)
+        return (wrong > 0 or (self.max_pos_mm is not None and self.max_pos_mm > POSITION_TOL_MM)
+                or (self.max_slot_mm is not None and self.max_slot_mm > SLOT_TOL_MM))
 
     def to_dict(self) -> dict[str, Any]:
         return to_plain(self)

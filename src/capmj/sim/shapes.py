@@ -26,6 +26,10 @@ class LocalBox:
 FIXTURE_SLOT = BLOCK_SIZES["small"]
 """Slot pitch ``a`` (m) of an L-fixture: its slots hold small blocks, and its body origin is the
 centre of slot (0, 0)."""
+FIXTURE_SLOTS_LOCAL: tuple[tuple[float, float, float], ...] = (
+    (0.0, 0.0, 0.0), (FIXTURE_SLOT, 0.0, 0.0), (0.0, FIXTURE_SLOT, 0.0))
+"""The three slots in the fixture frame (spec task 10): along the long wall, then the short one.
+Here, beside the walls, because the task predicates and the perception audit both place them."""
 _INNER = FIXTURE_SLOT / 2 + FIXTURE_CLEARANCE  # slot (0, 0) centre to a wall's inner face
 FIXTURE_WALLS: tuple[LocalBox, ...] = (
     LocalBox((FIXTURE_LONG / 2 - _INNER - FIXTURE_WALL, -(_INNER + FIXTURE_WALL / 2), 0.0),
@@ -44,4 +48,4 @@ the clearance and half a small block (3.3 cm)."""
 FIXTURE_RECT = (FIXTURE_LONG, FIXTURE_SHORT + FIXTURE_WALL)
 """Sides (m) of the rectangle enclosing the L seen from above: 10 x 6 cm."""
 
-__all__ = ["FIXTURE_ORIGIN_IN", "FIXTURE_RECT", "FIXTURE_SLOT", "FIXTURE_WALLS", "LocalBox"]
+__all__ = ["FIXTURE_ORIGIN_IN", "FIXTURE_RECT", "FIXTURE_SLOT", "FIXTURE_SLOTS_LOCAL", "FIXTURE_WALLS", "LocalBox"]

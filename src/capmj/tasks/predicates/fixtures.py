@@ -7,15 +7,12 @@ from typing import Iterable
 
 import numpy as np
 
-from capmj.sim.shapes import FIXTURE_SLOT
+from capmj.sim.shapes import FIXTURE_SLOT, FIXTURE_SLOTS_LOCAL
 from capmj.sim.objects import FIXTURE_HEIGHT, FIXTURE_LONG, FIXTURE_WALL
 from capmj.sim.pose import Vector, from_frame_2d
 from capmj.sim.state import SceneState
 from capmj.tasks.predicates.stacks import toppled
 
-FIXTURE_SLOTS_LOCAL: tuple[tuple[float, float, float], ...] = (
-    (0.0, 0.0, 0.0), (FIXTURE_SLOT, 0.0, 0.0), (0.0, FIXTURE_SLOT, 0.0))
-"""The three slots in the fixture frame (spec task 10): along the long wall, then the short one."""
 FIXTURE_RADIUS = math.hypot(FIXTURE_LONG - FIXTURE_SLOT / 2 - FIXTURE_WALL, FIXTURE_SLOT / 2 + FIXTURE_WALL)
 """Distance (m) from the fixture origin bounding its farthest point (the outer end of the long wall,
 local (0.067, −0.033) with the walls ``FIXTURE_CLEARANCE`` out; the bound is that of walls
