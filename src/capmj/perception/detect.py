@@ -27,7 +27,16 @@ import numpy as np
 
 from capmj.perception.footprint import Rect, fit_l, l_corners, min_area_rect, square_yaw
 from capmj.perception.segment import Segment
-from capmj.sim.objects import BALL_RADIUS, BLOCK_SIZES, BOWL_HEIGHT, BOWL_RADIUS, FIXTURE_HEIGHT, ZONE_HEIGHT, ZONE_SIZE
+from capmj.sim.objects import (
+    BALL_RADIUS,
+    BLOCK_SIZES,
+    BOWL_HEIGHT,
+    BOWL_RADIUS,
+    FIXED_KINDS,
+    FIXTURE_HEIGHT,
+    ZONE_HEIGHT,
+    ZONE_SIZE,
+)
 from capmj.sim.palette import COLOR_NAMES
 from capmj.sim.shapes import FIXTURE_RECT
 
@@ -63,7 +72,8 @@ class Detection:
 
     @property
     def fixed(self) -> bool:
-        return self.kind != "block"
+        """Whether the kind is one the robot cannot pick (the catalogue's own set, as in state mode)."""
+        return self.kind in FIXED_KINDS
 
 
 def _rect(xy: np.ndarray, cell: float) -> Rect:
