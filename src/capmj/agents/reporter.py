@@ -17,34 +17,21 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.reporter_env import PREBOUND, reporter_env
+from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.reporter_vlm import VLMReporter
-from capmj.agents.sandbox import extract_code, run_code
-from capmj.agents.verdict import Report, direct_verdict, names_of, parse_verdict
-from capmj.errors import ConfigError, PlanError, describe
+from capmj.agents.verdict import Report, direct_verdict, parse_verdict, run_checking_code
+from capmj.errors import ConfigError
 
 # Re-exported: Report and parse_verdict (tests import them from here), VLMReporter (make_reporter's).
 __all__ = ["REPORTERS", "REPORTER_PROMPTS", "Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
 
 REPORTERS = ("none", "text", "vlm")
-REPORTER_PROMPTS = ("thesis", "checked")
-"""``--reporter-prompt``: :class:`TextReporter`, or :class:`~capmj.agents.reporter_checked.CheckedReporter`."""
-
-
-def _is_bool(value: Any) -> bool:
-    return isinstance(value, (bool, np.bool_))
-
-
-def _failing_line(exc: PlanError, code: str) -> str:
-    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
-    lines = code.splitlines()
-    if exc.line is None or not 1 <= exc.line <= len(lines):
-        return ""
-    return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
+REPORTER_PROMPTS = ("thesis", "checked", "records")
+"""``--reporter-prompt``: :class:`TextReporter`, :class:`~capmj.agents.reporter_checked.CheckedReporter`
+or :class:`~capmj.agents.reporter_records.RecordsReporter`."""
 
 
 def _repair_request(problem: str, question: str) -> str:
@@ -89,27 +76,7 @@ class TextReporter:
         """(verdict, reason, wrong, problem) of one answer's checking code."""
         env = session.helper_env(question)
         env.update(reporter_env(session.api, ctx.world.objects, goal))  # fresh: code may mutate it
-        code = ""
-        try:
-            code = extract_code(text)
-            code = session.prepare(code, env, parent=call)
-            session.record(call, "code", code)
-            ns = run_code(code, env, budget=session.lmp_budget,
-                          filename=f"<parse_completion {session.attempt}.{call.n}>")
-        except PlanError as exc:
-            problem = f"{describe(exc)}{_failing_line(exc, code)}"
-            session.record(call, "error", problem)
-            return None, "", (), problem
-        judge, reason = ns.get("judge"), ns.get("reason")
-        reason = reason if isinstance(reason, str) else ""
-        if not _is_bool(judge):
-            problem = ("the code did not set 'judge'" if "judge" not in ns
-                       else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
-            session.record(call, "error", problem)
-            return None, reason, (), problem
-        wrong = names_of(ns.get("wrong"))
-        session.record(call, "result", f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-        return bool(judge), reason, wrong, None
+        return run_checking_code(session, call, text, env, f"<parse_completion {session.attempt}.{call.n}>")
 
     def close(self) -> None:
         return None
@@ -123,6 +90,8 @@ def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis
         return None
     if mode == "text" and prompt == "checked":
         return CheckedReporter(prompt_directory)
+    if mode == "text" and prompt == "records":
+        return RecordsReporter()
     if mode == "text":
         return TextReporter()
     if mode == "vlm":

@@ -35,7 +35,7 @@ from capmj.sim.pose import wxyz
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
 
-__all__ = ["ObjectFacts", "facts_text", "resolve_name", "scene_facts", "state_from_api"]
+__all__ = ["ObjectFacts", "area_of", "facts_text", "resolve_name", "scene_facts", "state_from_api"]
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,8 @@ def state_from_api(api: Mapping[str, Callable[..., Any]], objects: Sequence[Obje
     return SceneState(tuple(objects), poses)
 
 
-def _area(pos: Any) -> str:
+def area_of(pos: Any) -> str:
+    """The quarter of the workspace ``pos`` lies in ("top left", ...), or "outside the workspace"."""
     return next((q for q in P.QUADRANTS if P.in_area(pos, q)), "outside the workspace")
 
 
@@ -80,7 +81,7 @@ def scene_facts(state: SceneState) -> tuple[ObjectFacts, ...]:
         x, y, z = (round(float(v), 3) for v in state.pos(i))
         out.append(ObjectFacts(
             name=spec.name, kind=spec.kind, position=(x, y, z),
-            area=_area(state.pos(i)), rests_on=_rests_on(state, i, bowls, movable) if not spec.fixed else "the table",
+            area=area_of(state.pos(i)), rests_on=_rests_on(state, i, bowls, movable) if not spec.fixed else "the table",
             inside=tuple(state.spec(c).name for c in inside[i]),
             tilt_deg=round(math.degrees(state.poses[i].tilt), 0),
             holds=tuple(state.spec(m).name for m in movable if i in inside[m])))

@@ -26,10 +26,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from capmj.agents.lmp import LMPCall, LMPSession, prompts_dir
-from capmj.agents.sandbox import extract_code
-from capmj.errors import ConfigError, PlanError
+import numpy as np
 
-__all__ = ["SOURCES", "Report", "ask_verdict", "direct_verdict", "parse_verdict", "parse_wrong", "scene_listing"]
+from capmj.agents.sandbox import extract_code, run_code
+from capmj.errors import ConfigError, PlanError, describe
+
+__all__ = ["SOURCES", "Report", "ask_verdict", "direct_verdict", "parse_verdict", "parse_wrong", "run_checking_code", "scene_listing"]
 
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
@@ -195,3 +197,40 @@ def ask_verdict(session: LMPSession, mode: str, call_for: Callable[[str], LMPCal
         messages = messages + [{"role": "assistant", "content": text},
                                {"role": "user", "content": f"Your answer gave no verdict: {problem}. {repair_hint}"}]
     return None, errors
+
+
+# ------------------------------------------------------------------------------------------------
+# verdicts computed by checking code (the text reporters that let the model write code)
+# ------------------------------------------------------------------------------------------------
+def _failing_line(exc: PlanError, code: str) -> str:
+    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
+    lines = code.splitlines()
+    if exc.line is None or not 1 <= exc.line <= len(lines):
+        return ""
+    return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
+
+
+def run_checking_code(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str
+                      ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
+    """``(verdict, reason, wrong, problem)`` of the checking code in ``text``, run in the sandbox
+    with ``env`` (after :meth:`LMPSession.prepare`); ``problem`` is None when it set a bool ``judge``."""
+    code = ""
+    try:
+        code = extract_code(text)
+        code = session.prepare(code, env, parent=call)
+        session.record(call, "code", code)
+        ns = run_code(code, env, budget=session.lmp_budget, filename=filename)
+    except PlanError as exc:
+        problem = f"{describe(exc)}{_failing_line(exc, code)}"
+        session.record(call, "error", problem)
+        return None, "", (), problem
+    judge, reason = ns.get("judge"), ns.get("reason")
+    reason = reason if isinstance(reason, str) else ""
+    if not isinstance(judge, (bool, np.bool_)):
+        problem = ("the code did not set 'judge'" if "judge" not in ns
+                   else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
+        session.record(call, "error", problem)
+        return None, reason, (), problem
+    wrong = names_of(ns.get("wrong"))
+    session.record(call, "result", f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+    return bool(judge), reason, wrong, None

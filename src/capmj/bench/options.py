@@ -69,8 +69,9 @@ AGENT_FLAGS: tuple[Flag, ...] = (
     Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: thesis (default: reset and re-plan "
          "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
          "on a low-confidence one; docs/llm.md)", choices=("thesis", "careful")),
-    Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code) or "
-         "checked (capmj binds the scene facts; docs/judge.md)", choices=("thesis", "checked")),
+    Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code), "
+         "checked (capmj binds the scene facts as text) or records (as records for checking code; docs/judge.md)",
+         choices=("thesis", "checked", "records")),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "

@@ -25,7 +25,7 @@ RECORD_FIELDS: dict[str, str] = {
     "task": "task name", "seed": "episode seed", "case": "case name within (task, seed)",
     "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, toppled_out, near_inside, near_outside (or run)",
     "label": "ground truth: the task predicate's success on the state", "reporter": "the reporter's label",
-    "reporter_prompt": "the text reporter's prompt: thesis or checked (--reporter-prompt)",
+    "reporter_prompt": "the text reporter's prompt: thesis, checked or records (--reporter-prompt)",
     "verdict": "the reporter's verdict: true, false or null (unknown)",
     "source": "where the verdict came from: code, repair, direct, unknown (or predicate)",
     "reason": "the reporter's reason", "wrong": "objects it names as wrong",
