@@ -8,7 +8,7 @@
 #   "rests_on"    "table", or the full name of the block (or bowl) it is centred on, or "nothing"
 #   "below"       the full names of the blocks it rests on (several when it bridges them, as in a pyramid)
 #   "level"       1 when it rests on the table, a zone or in a bowl; 2 on blocks of level 1; 3 on level 2 ...
-#   "inside"      the full names of the zones and bowls it is in;  "inside_colors": their colours
+#   "inside"      the full name of the zone or bowl it is in, "" when none;  "inside_color": its colour, or ""
 #   "holds"       for zones and bowls: the full names of the movable objects inside it
 #   "tilted"      True when it leans or lies on a side
 #   "centre"      [x, y, z] in metres
@@ -24,14 +24,14 @@
 # example goal: Put all the red blocks in the green zone.
 red_blocks = [o for o in objects if o["kind"] == "block" and o["color"] == "red"]
 green_zone = [o for o in objects if o["kind"] == "zone" and o["color"] == "green"][0]
-wrong = [b["name"] for b in red_blocks if green_zone["name"] not in b["inside"]]
+wrong = [b["name"] for b in red_blocks if b["inside"] != green_zone["name"]]
 judge = len(wrong) == 0
 reason = "red blocks outside the green zone: " + ", ".join(wrong)
 
 # example goal: Stack the blue blocks into one tower in the yellow zone.
 blue_blocks = [o for o in objects if o["kind"] == "block" and o["color"] == "blue"]
 yellow_zone = [o for o in objects if o["kind"] == "zone" and o["color"] == "yellow"][0]
-wrong = [b["name"] for b in blue_blocks if yellow_zone["name"] not in b["inside"] or b["tilted"]]
+wrong = [b["name"] for b in blue_blocks if b["inside"] != yellow_zone["name"] or b["tilted"]]
 levels = sorted(b["level"] for b in blue_blocks)
 judge = len(wrong) == 0 and levels == list(range(1, len(blue_blocks) + 1))
 reason = "blue block levels " + str(levels) + ", outside the zone or tilted: " + ", ".join(wrong)

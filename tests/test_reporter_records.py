@@ -48,12 +48,12 @@ def test_records_of_real_states_follow_the_tasks_rules() -> None:
     in_bowls = [r for r in solved if r["kind"] == "block" and r["inside"]]
     assert in_bowls
     for r in in_bowls:  # the oracle's blocks sit in the bowl of their colour, and the bowl says it holds them
-        bowl = next(b for b in solved if b["name"] == r["inside"][0])
-        assert r["inside_colors"] == [r["color"]] == [bowl["color"]] and r["rests_on"] == bowl["name"]
+        bowl = next(b for b in solved if b["name"] == r["inside"])
+        assert r["inside_color"] == r["color"] == bowl["color"] and r["rests_on"] == bowl["name"]
         assert r["level"] == 1 and not r["tilted"] and r["name"] in bowl["holds"]
     moved = records(stage.realise(cases["displaced"].poses()))
     out = [m for m, s in zip(moved, solved) if m["inside"] != s["inside"]]
-    assert len(out) == 1 and out[0]["inside"] == [] and out[0]["rests_on"] == "table"
+    assert len(out) == 1 and out[0]["inside"] == out[0]["inside_color"] == "" and out[0]["rests_on"] == "table"
     assert ast.literal_eval(records_text(moved).removeprefix("objects = ")) == moved  # the prompt shows them exactly
 
 
@@ -87,7 +87,7 @@ def test_the_prompt_documents_every_record_key_and_stops_before_another_example(
 
 MATCHING_BOWL_CHECK = """
 blocks = [o for o in objects if o["kind"] == "block"]
-wrong = [b["name"] for b in blocks if b["color"] not in b["inside_colors"]]
+wrong = [b["name"] for b in blocks if b["color"] != b["inside_color"]]
 judge = len(wrong) == 0
 reason = "blocks outside a bowl of their colour: " + ", ".join(wrong)
 """
@@ -137,7 +137,7 @@ def test_failing_or_hostile_code_gets_one_repair_then_unknown(server: StubLLMSer
     assert r["errors"][0].startswith("code: ") and "import" in r["errors"][0]
     assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1]
     repair = prompt_text(server.requests[-1])
-    assert "The checking code above failed" in repair and "inside_colors" in repair
+    assert "The checking code above failed" in repair and "inside_color" in repair
 
 
 def test_start_area_is_the_quarter_an_object_began_in(server: StubLLMServer, tmp_path: Path) -> None:

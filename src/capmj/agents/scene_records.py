@@ -11,9 +11,10 @@ Keys (``RECORD_KEYS``, documented to the model in ``prompts/reporter_records.py`
 ``start_area`` (the quarter it was in when the episode began), ``rests_on`` (``"table"``, the full
 name of the object or bowl it is centred on, or ``"nothing"``), ``below`` (the movable objects it
 rests on, by footprint overlap: a pyramid's upper blocks rest on several), ``level`` (1 on the
-table, a zone or in a bowl; else one more than the highest object below), ``inside`` (zones and bowls it is in), ``inside_colors`` (their
-colours), ``holds`` (for zones and bowls:
-the movable objects inside), ``tilted`` and ``centre`` ([x, y, z], m).
+table, a zone or in a bowl; else one more than the highest object below), ``inside`` (the zone or
+bowl it is in, ``""`` for none: a string, so ``b["inside"] != zone["name"]`` needs no guard),
+``inside_color`` (its colour, or ``""``), ``holds`` (for zones and bowls: the movable objects
+inside), ``tilted`` and ``centre`` ([x, y, z], m).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from capmj.tasks import predicates as P
 
 __all__ = ["RECORD_KEYS", "records", "records_text", "start_areas_of"]
 
-RECORD_KEYS = ("name", "kind", "color", "size", "area", "start_area", "rests_on", "below", "level", "inside", "inside_colors",
+RECORD_KEYS = ("name", "kind", "color", "size", "area", "start_area", "rests_on", "below", "level", "inside", "inside_color",
                "holds", "tilted", "centre")
 _REST_SUFFIX = " (inside)"
 _NOTHING = "nothing (in the air or leaning)"
@@ -77,7 +78,7 @@ def records(state: SceneState, start_areas: Mapping[int, str] | None = None) -> 
             "area": f.area, "start_area": (start_areas or {}).get(spec.obj_id, f.area),
             "rests_on": _rests_on(f), "below": [state.spec(j).name for j in below[spec.obj_id]],
             "level": levels[spec.obj_id],
-            "inside": list(f.inside), "inside_colors": [colors[c] for c in f.inside],
+            "inside": f.inside[0] if f.inside else "", "inside_color": colors[f.inside[0]] if f.inside else "",
             "holds": list(f.holds) if container else [],
             "tilted": f.tilt_deg > math.degrees(P.TILT_TOL), "centre": [round(v, 3) for v in f.position]})
     return out
