@@ -19,7 +19,7 @@
 #   wrong = the full names of the movable objects that break the goal ([] when judge is True)
 # Use only `objects` and Python built-ins; never import anything.
 
-#@ stop: ["\n\n# example goal", "\n\nobjects = ["]
+#@ stop: ["\n\n# example goal", "\n\nobjects = [", "\n    {'name': "]
 
 # example goal: Put all the red blocks in the green zone.
 red_blocks = [o for o in objects if o["kind"] == "block" and o["color"] == "red"]

@@ -19,7 +19,7 @@ from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.agents.prompt_files import load_prompt
 from capmj.agents.reporter import REPORTER_PROMPTS, make_reporter
-from capmj.agents.reporter_records import PROMPT, RecordsReporter
+from capmj.agents.reporter_records import PROMPT, REPAIR_TEMPERATURE, RecordsReporter
 from capmj.agents.scene_facts import area_of
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text
 from capmj.bench.cli import main
@@ -138,6 +138,11 @@ def test_failing_or_hostile_code_gets_one_repair_then_unknown(server: StubLLMSer
     assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1]
     repair = prompt_text(server.requests[-1])
     assert "The checking code above failed" in repair and "inside_color" in repair
+    # at temperature 0 the 1.5B model repeated its failed answer: the repair samples warmer, seeded by the state
+    first, second = server.requests[-2], server.requests[-1]
+    assert first.get("temperature", 0) == 0 and "seed" not in first
+    assert second["temperature"] == REPAIR_TEMPERATURE > 0 and isinstance(second["seed"], int)
+    assert second["stop"] == list(load_prompt(PROMPT).stop) and "\n    {'name': " in second["stop"]
 
 
 def test_start_area_is_the_quarter_an_object_began_in(server: StubLLMServer, tmp_path: Path) -> None:

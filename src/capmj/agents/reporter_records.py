@@ -18,10 +18,17 @@ writes code that sets ``judge``, ``reason`` and ``wrong``.  The code runs in the
 other model-written code (:func:`capmj.agents.verdict.run_checking_code`), with one repair request
 on failure; still no verdict: unknown (no ``direct`` fallback: its prompt asks the model to derive
 facts again, which is what this prompt exists to avoid).
+
+The repair request samples at :data:`REPAIR_TEMPERATURE` with a seed derived from the question: at
+temperature 0 the 1.5B model answered the repair request with its failed answer byte for byte
+(an import, or the records list copied out), so the repair could not succeed.  The prompt's stop
+sequences also cut an answer that starts copying the records out (``\n    {'name': ``), which
+otherwise ran to the token limit (1024 tokens, ~90 s on the shared machine) before failing.
 """
 
 from __future__ import annotations
 
+import hashlib
 from typing import Any
 
 from capmj.agents.lmp import LMPSession
@@ -33,6 +40,15 @@ __all__ = ["PROMPT", "RecordsReporter"]
 
 PROMPT = "reporter_records"
 """The prompt file (``prompts/reporter_records.py``) and the LMP name in transcripts."""
+
+REPAIR_TEMPERATURE = 0.7
+"""Sampling temperature of the repair request (the first request uses the client's, default 0)."""
+
+
+def repair_seed(question: str) -> int:
+    """The repair request's sampling seed: the same state and goal give the same seed (so a run
+    repeats, and the LLM cache key holds), 31 bits as for the planner's re-plans."""
+    return int.from_bytes(hashlib.sha256(f"capmj-records-repair/{question}".encode()).digest()[:4], "big") & 0x7FFF_FFFF
 
 
 class RecordsReporter:
@@ -62,9 +78,10 @@ class RecordsReporter:
         question = self.question(session, ctx, goal)
         messages = session.messages(session.prompt(PROMPT).render(question))
         errors: tuple[str, ...] = ()
-        for source in ("code", "repair"):
+        for source, sampling in (("code", {}), ("repair", {"temperature": REPAIR_TEMPERATURE,
+                                                            "seed": repair_seed(question)})):
             call = session.next_call(PROMPT, goal)
-            text = session.ask(call, messages)
+            text = session.ask(call, messages, **sampling)
             env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it
             verdict, reason, wrong, problem = run_checking_code(
                 session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>")
