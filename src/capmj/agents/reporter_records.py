@@ -23,7 +23,8 @@ The repair request samples at :data:`REPAIR_TEMPERATURE` with a seed derived fro
 temperature 0 the 1.5B model answered the repair request with its failed answer byte for byte
 (an import, or the records list copied out), so the repair could not succeed.  The prompt's stop
 sequences also cut an answer that starts copying the records out (``\n    {'name': ``), which
-otherwise ran to the token limit (1024 tokens, ~90 s on the shared machine) before failing.
+otherwise ran to the token limit (512 tokens with `--llm-max-tokens 512`, ~45 s on the shared
+machine) before failing.
 """
 
 from __future__ import annotations
