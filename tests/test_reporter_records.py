@@ -55,6 +55,8 @@ def test_records_of_real_states_follow_the_tasks_rules() -> None:
     out = [m for m, s in zip(moved, solved) if m["inside"] != s["inside"]]
     assert len(out) == 1 and out[0]["inside"] == out[0]["inside_color"] == "" and out[0]["rests_on"] == "table"
     assert ast.literal_eval(records_text(moved).removeprefix("objects = ")) == moved  # the prompt shows them exactly
+    copy_stop = "\n    {'name': "  # the prompt's stop on an answer copying the records out matches their layout
+    assert copy_stop in load_prompt(PROMPT).stop and copy_stop in records_text(moved)
 
 
 def test_levels_count_the_blocks_below() -> None:

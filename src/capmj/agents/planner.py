@@ -20,7 +20,6 @@ deterministic, so it would end as that attempt did.  :class:`PlanOutcome` record
 from __future__ import annotations
 
 import ast
-import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,6 +27,7 @@ from typing import Any
 from capmj.agents.lmp import LMPCall, LMPSession, object_names
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.errors import PlanError, describe
+from capmj.llm.provider import derived_seed
 
 __all__ = ["DEFAULT_PLAN_BUDGET", "MAX_REPLAN_TEMPERATURE", "REPLAN_TEMPERATURE_STEP", "Feedback", "PlanOutcome",
            "Sampling", "build_messages", "feedback_text", "fresh_messages", "identical_text", "plan_and_run", "plan_key",
@@ -68,12 +68,11 @@ def replan_sampling(base: float, episode_seed: int, attempt: int, retry: int) ->
     The seed (the OpenAI ``seed`` parameter) is derived from the episode seed, the attempt and the
     retry alone.  Why: without one, llama.cpp and other servers draw a random seed per request, so
     a run could not be repeated; with it, a server that honours ``seed`` answers the same request
-    the same way (and the LLM cache key includes it), while each retry still draws anew.  31 bits:
-    valid for llama.cpp (uint32, where -1 means random) and OpenAI alike.
+    the same way (and the LLM cache key includes it), while each retry still draws anew
+    (:func:`capmj.llm.provider.derived_seed`).
     """
     temperature = min(base + REPLAN_TEMPERATURE_STEP * retry, max(base, MAX_REPLAN_TEMPERATURE))
-    digest = hashlib.sha256(f"capmj-replan/{int(episode_seed)}/{int(attempt)}/{int(retry)}".encode()).digest()
-    return Sampling(round(temperature, 3), int.from_bytes(digest[:4], "big") & 0x7FFF_FFFF)
+    return Sampling(round(temperature, 3), derived_seed(f"capmj-replan/{int(episode_seed)}/{int(attempt)}/{int(retry)}"))
 
 
 @dataclass(frozen=True)

@@ -29,13 +29,13 @@ machine) before failing.
 
 from __future__ import annotations
 
-import hashlib
 from typing import Any
 
 from capmj.agents.lmp import LMPSession
 from capmj.agents.scene_facts import state_from_api
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of
 from capmj.agents.verdict import Report, run_checking_code
+from capmj.llm.provider import derived_seed
 
 __all__ = ["PROMPT", "RecordsReporter"]
 
@@ -44,12 +44,6 @@ PROMPT = "reporter_records"
 
 REPAIR_TEMPERATURE = 0.7
 """Sampling temperature of the repair request (the first request uses the client's, default 0)."""
-
-
-def repair_seed(question: str) -> int:
-    """The repair request's sampling seed: the same state and goal give the same seed (so a run
-    repeats, and the LLM cache key holds), 31 bits as for the planner's re-plans."""
-    return int.from_bytes(hashlib.sha256(f"capmj-records-repair/{question}".encode()).digest()[:4], "big") & 0x7FFF_FFFF
 
 
 class RecordsReporter:
@@ -80,7 +74,7 @@ class RecordsReporter:
         messages = session.messages(session.prompt(PROMPT).render(question))
         errors: tuple[str, ...] = ()
         for source, sampling in (("code", {}), ("repair", {"temperature": REPAIR_TEMPERATURE,
-                                                            "seed": repair_seed(question)})):
+                                                            "seed": derived_seed(f"capmj-records-repair/{question}")})):
             call = session.next_call(PROMPT, goal)
             text = session.ask(call, messages, **sampling)
             env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it

@@ -10,6 +10,7 @@ Every function here reads a provider's answer or exception defensively: they hav
 from __future__ import annotations
 
 import functools
+import hashlib
 import math
 import os
 from types import ModuleType
@@ -103,6 +104,13 @@ def takes_seed(model: str, api_base: str | None = None) -> bool:
     except Exception:  # noqa: BLE001 - unknown model: do not send what it may reject
         return False
     return "seed" in (params or ())
+
+
+def derived_seed(key: str) -> int:
+    """A request's sampling seed (the OpenAI ``seed`` parameter) derived from ``key`` alone, so the
+    same request gets the same seed in any process (and the LLM cache key holds).  31 bits: valid
+    for llama.cpp (uint32, where -1 means random) and OpenAI alike."""
+    return int.from_bytes(hashlib.sha256(key.encode()).digest()[:4], "big") & 0x7FFF_FFFF
 
 
 def cost(response: Any) -> float:
