@@ -129,22 +129,45 @@ def test_checking_code_over_the_records_runs_in_the_sandbox_and_gives_the_verdic
     assert any(not r["label"] for r in judged)
 
 
-def test_failing_or_hostile_code_gets_one_repair_then_unknown(server: StubLLMServer, tmp_path: Path) -> None:
-    answers = iter([code("import os\njudge = os.system('true') == 0"), code("judge = objects[99]['tilted']")])
+def test_failing_or_hostile_code_gets_one_repair_then_the_checked_question(server: StubLLMServer,
+                                                                           tmp_path: Path) -> None:
+    """Two failed checks: the ``checked`` question (facts, a literal answer) gives the verdict, as ``direct``."""
+    answers = iter([code("import os\njudge = os.system('true') == 0"), code("judge = objects[99]['tilted']"),
+                    code("judge = False\nreason = 'a block is out'\nwrong = []")])
     server.respond_with(lambda request: next(answers))
     rc, s, judged = judge(tmp_path, server, "--kinds", "oracle")
     assert rc == 0 and len(judged) == 1
     r = judged[0]
-    assert r["verdict"] is None and r["source"] == "unknown" and r["calls"] == 2
+    assert r["verdict"] is False and r["source"] == "direct" and r["calls"] == 3 and r["reason"] == "a block is out"
     assert r["errors"][0].startswith("code: ") and "import" in r["errors"][0]
-    assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1]
-    repair = prompt_text(server.requests[-1])
+    assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1] and len(r["errors"]) == 2
+    repair = prompt_text(server.requests[1])
     assert "The checking code above failed" in repair and "inside_color" in repair
+    assert "already defined with the records" not in repair  # the answer did not copy the records
     # at temperature 0 the 1.5B model repeated its failed answer: the repair samples warmer, seeded by the state
-    first, second = server.requests[-2], server.requests[-1]
+    first, second = server.requests[0], server.requests[1]
     assert first.get("temperature", 0) == 0 and "seed" not in first
     assert second["temperature"] == REPAIR_TEMPERATURE > 0 and isinstance(second["seed"], int)
     assert second["stop"] == list(load_prompt(PROMPT).stop) and "\n    {'name': " in second["stop"]
+    direct = prompt_text(server.requests[2])
+    assert "Facts after the robot acted" in direct and "objects = [" not in direct
+    assert "Goal: Put the blocks in the bowls" in direct
+
+
+def test_an_answer_copying_the_records_is_told_so_and_no_verdict_at_all_is_unknown(server: StubLLMServer,
+                                                                                 tmp_path: Path) -> None:
+    """The 1.5B model's commonest failure: ``objects = [`` cut at the copy stop.  The repair says so in
+    words; when the checked question gives no verdict either (twice), the verdict is unknown."""
+    answers = iter(["objects = [", "```python\nobjects = [", "no idea", "still no idea"])
+    server.respond_with(lambda request: next(answers))
+    rc, s, judged = judge(tmp_path, server, "--kinds", "oracle")
+    assert rc == 0 and len(judged) == 1
+    r = judged[0]
+    assert r["verdict"] is None and r["source"] == "unknown" and r["calls"] == 4
+    assert [e.split(":")[0] for e in r["errors"]] == ["code", "repair", "direct code", "direct repair"]
+    assert "SyntaxError" in r["errors"][0] and r["low_confidence"] == "no_verdict"
+    assert "`objects` is already defined with the records above" in prompt_text(server.requests[1])
+    assert s["overall"]["verdict_rate"] == 0.0
 
 
 def test_start_area_is_the_quarter_an_object_began_in(server: StubLLMServer, tmp_path: Path) -> None:

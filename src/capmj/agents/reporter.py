@@ -91,7 +91,7 @@ def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis
     if mode == "text" and prompt == "checked":
         return CheckedReporter(prompt_directory)
     if mode == "text" and prompt == "records":
-        return RecordsReporter()
+        return RecordsReporter(prompt_directory)
     if mode == "text":
         return TextReporter()
     if mode == "vlm":

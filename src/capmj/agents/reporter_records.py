@@ -16,8 +16,16 @@ Python list of dicts (:mod:`capmj.agents.scene_records`), the prompt
 (``prompts/reporter_records.py``) documents the keys and shows three short checks, and the model
 writes code that sets ``judge``, ``reason`` and ``wrong``.  The code runs in the sandbox like every
 other model-written code (:func:`capmj.agents.verdict.run_checking_code`), with one repair request
-on failure; still no verdict: unknown (no ``direct`` fallback: its prompt asks the model to derive
-facts again, which is what this prompt exists to avoid).
+on failure.  Still no verdict: the ``checked`` question (:class:`~capmj.agents.reporter_checked.CheckedReporter`,
+the same measured facts, a literal answer parsed and never run) is asked as the ``direct`` source.
+Why: on the judge's 40-state subset (seeds 10001 and 10003) 9-14 states ended unknown, every one
+because the checking code failed twice (a line cut at the copy stop, an import, a wrong index),
+while ``checked`` reached a verdict on every state it was asked.  Not the ``thesis`` direct prompt:
+it asks the model to derive the facts again from poses, which is what this prompt exists to avoid.
+
+The commonest failure was an answer that began by writing the records out again
+(``objects = [`` cut at the copy stop, then a syntax error); its repair request says so in words
+(:data:`COPIED_RECORDS_HINT`) instead of only quoting the error the model had repeated.
 
 The repair request samples at :data:`REPAIR_TEMPERATURE` with a seed derived from the question: at
 temperature 0 the 1.5B model answered the repair request with its failed answer byte for byte
@@ -29,9 +37,12 @@ machine) before failing.
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from typing import Any
 
 from capmj.agents.lmp import LMPSession
+from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.scene_facts import state_from_api
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of
 from capmj.agents.verdict import Report, run_checking_code
@@ -41,6 +52,12 @@ __all__ = ["PROMPT", "RecordsReporter"]
 
 PROMPT = "reporter_records"
 """The prompt file (``prompts/reporter_records.py``) and the LMP name in transcripts."""
+
+COPIED_RECORDS_HINT = ("# `objects` is already defined with the records above: do not write it out again. "
+                       "Start with the first line of the check.\n")
+"""Added to the repair request when the failed answer began by assigning ``objects``."""
+
+_COPIES_RECORDS = re.compile(r"\A\s*(?:```[A-Za-z]*\s*)?objects\s*=")
 
 REPAIR_TEMPERATURE = 0.7
 """Sampling temperature of the repair request (the first request uses the client's, default 0)."""
@@ -52,8 +69,9 @@ class RecordsReporter:
     mode = "text"
     prompt = "records"
 
-    def __init__(self) -> None:
+    def __init__(self, prompt_directory: Any = None) -> None:
         self._start: dict[int, str] = {}
+        self._fallback = CheckedReporter(prompt_directory)
 
     def start(self, ctx: Any) -> None:
         """Remember the quarter each object starts in (the ``start_area`` of its record).
@@ -83,12 +101,21 @@ class RecordsReporter:
             if problem is None:
                 return Report(self.mode, verdict, reason, errors[-1] if errors else None, source, wrong, errors)
             errors += (f"{source}: {problem}",)
+            copied = COPIED_RECORDS_HINT if _COPIES_RECORDS.match(text) else ""
             messages = messages + [{"role": "assistant", "content": text}, {"role": "user", "content": (
-                f"# The checking code above failed: {problem}\n# Write the corrected complete checking code "
+                f"# The checking code above failed: {problem}\n{copied}# Write the corrected complete checking code "
                 f"for the same goal, using only `objects` (dicts with keys {', '.join(RECORD_KEYS)}).\n"
                 f"# Set judge = True or False, reason = a short sentence, wrong = [full names of the movable "
                 f"objects that break the goal].\n# goal: {' '.join(goal.split())}\n")}]
-        return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
+        return self._direct(session, ctx, goal, errors)
+
+    def _direct(self, session: LMPSession, ctx: Any, goal: str, errors: tuple[str, ...]) -> Report:
+        """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""
+        report = self._fallback.judge(session, ctx, goal)
+        errors += tuple(f"direct {e}" for e in report.errors)
+        if report.verdict is None:
+            return dataclasses.replace(report, source="unknown", errors=errors, error=errors[-1])
+        return dataclasses.replace(report, source="direct", errors=errors, error=errors[-1])
 
     def close(self) -> None:
         return None
