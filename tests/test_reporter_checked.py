@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from llm_stub_server import StubLLMServer, prompt_text
 
-from capmj.agents.confidence import assess
+from capmj.agents.confidence import LOW_CONFIDENCE, assess
 from capmj.agents.reporter import Report
 from capmj.agents.scene_facts import facts_text, resolve_name, scene_facts
 from capmj.bench.cli import main
@@ -70,6 +70,7 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "names_only_fixed": Report("text", False, "no", wrong=(bowl.name,)),
         "achieved_but_names_wrong": Report("text", True, "yes", wrong=(block.name,)),
         "no_verdict": Report("text", None, ""),
+        "direct_fallback": Report("text", False, "no", source="direct", wrong=(block.name,)),
     }
     for why, report in cases.items():
         a = assess(report, objects)
@@ -77,6 +78,7 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
     a = assess(Report("text", False, "no", wrong=(bowl.name, block.name)), objects)
     assert (a.confidence, a.why, a.wrong_ids) == ("high", None, (block.obj_id,))
     assert assess(Report("text", True, "yes"), objects).confidence == "high"
+    assert set(cases) == set(LOW_CONFIDENCE)  # every reason is reachable
 
 
 def judge(tmp_path: Path, *extra: str) -> tuple[int, dict[str, Any], list[dict[str, Any]]]:

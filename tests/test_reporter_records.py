@@ -139,6 +139,7 @@ def test_failing_or_hostile_code_gets_one_repair_then_the_checked_question(serve
     assert rc == 0 and len(judged) == 1
     r = judged[0]
     assert r["verdict"] is False and r["source"] == "direct" and r["calls"] == 3 and r["reason"] == "a block is out"
+    assert (r["confidence"], r["low_confidence"]) == ("low", "direct_fallback")  # not acted on by `careful`
     assert r["errors"][0].startswith("code: ") and "import" in r["errors"][0]
     assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1] and len(r["errors"]) == 2
     repair = prompt_text(server.requests[1])

@@ -11,7 +11,12 @@ rules: a "not achieved" that cannot say which object is wrong gives a re-plan no
 small model's unfounded "no" was exactly what undid reached goals (issue #26: with the shared 1.5B
 model, H and J reached the goal, the reporter said no, the re-plan undid it).  Naming only fixed
 objects (zones, bowls: the robot cannot move them, so they are where they started) contradicts the
-facts, and so does an "achieved" that lists wrong objects.  The ``careful`` loop
+facts, and so does an "achieved" that lists wrong objects.  A ``direct`` verdict (asked as a
+plain question after the model's checking code failed twice) is low-confidence whatever it says:
+it is the ``records`` prompt's fallback to the ``checked`` question, whose verdicts that named a
+movable object agreed with the predicate on 53-56 % of the judge set's states with the shared 1.5B
+model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; acting on it would
+re-plan achieved states at chance.  The ``careful`` loop
 (:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
 """
@@ -34,6 +39,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "names_no_real_object": "not achieved, but none of the names is an object of the scene",
     "names_only_fixed": "not achieved, but it names only objects the robot cannot move (they are where they started)",
     "achieved_but_names_wrong": "achieved, yet it names objects as wrong",
+    "direct_fallback": "the verdict came from the direct question after the reporter's checks failed",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 
@@ -54,6 +60,8 @@ def assess(report: Report | None, objects: Sequence[ObjectSpec]) -> Assessment:
     """The :class:`Assessment` of ``report`` (None: no reporter ran, low with ``no_verdict``)."""
     if report is None or report.verdict is None:
         return Assessment("low", "no_verdict")
+    if report.source == "direct":
+        return Assessment("low", "direct_fallback")
     named = [resolve_name(n, objects) for n in report.wrong]
     real = [o for o in named if o is not None]
     movable = tuple(dict.fromkeys(o.obj_id for o in real if not o.fixed))

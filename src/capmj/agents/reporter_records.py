@@ -22,6 +22,8 @@ Why: on the judge's 40-state subset (seeds 10001 and 10003) 9-14 states ended un
 because the checking code failed twice (a line cut at the copy stop, an import, a wrong index),
 while ``checked`` reached a verdict on every state it was asked.  Not the ``thesis`` direct prompt:
 it asks the model to derive the facts again from poses, which is what this prompt exists to avoid.
+A ``direct`` verdict is recorded and scored, but low-confidence (:func:`capmj.agents.confidence.assess`):
+the ``careful`` loop does not act on it.
 
 The commonest failure was an answer that began by writing the records out again
 (``objects = [`` cut at the copy stop, then a syntax error); its repair request says so in words
