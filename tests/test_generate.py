@@ -283,3 +283,44 @@ def test_the_task_api_text_is_the_same_in_every_process() -> None:
     out = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                           env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2", "3")}
     assert len(out) == 1, out
+
+
+def test_an_unreadable_proposal_gets_one_repair_and_json_with_comments_is_read(tmp_path):
+    """The shared 1.5B model's first bottom-up proposal was JSON with a ``// comment`` and a ``...``
+    item (copied from the prompt's old answer skeleton): such an answer is read; an answer with no
+    JSON at all gets one repair request; two unusable answers stop the candidate at ``propose``."""
+    c = candidate("broken_import_os.py")
+    script = GeneratorScript([c])
+    proposal = ('```json\n{\n  "name": "%s",\n  "goal": "%s",\n  "objects": ["blocks", ...],  // the objects\n'
+                '  "why": "scripted",\n}\n```' % (c.name, c.goal))
+    seen: list[str] = []
+
+    def responder(request):
+        last = str(request["messages"][-1]["content"])
+        seen.append(last)
+        if "Propose one NEW task" in last:
+            return "A task where the robot sorts blocks. It is interesting."
+        if "could not be read as a proposal" in last:
+            return proposal
+        return script(request)
+
+    with StubLLMServer(responder=responder) as server:
+        rec = generate(config(server, tmp_path, "out")).records[0]
+    assert rec.name == c.name and rec.proposal["objects"] == ["blocks"] and rec.stage == "static"
+    assert "no JSON value in the answer" in seen[1]
+    assert [t["purpose"] for t in json.loads((tmp_path / "out" / rec.conversation).read_text())["turns"]][:2] == [
+        "generate.propose", "generate.propose_repair"]
+
+    with StubLLMServer(responder=lambda request: "no JSON here, sorry") as server:
+        rec = generate(config(server, tmp_path, "out2")).records[0]
+    assert rec.stage == "propose" and not rec.accepted and "after the repair round" in rec.reason
+    assert rec.usage["calls"] == 2
+
+
+def test_json_extras_are_dropped_only_outside_strings():
+    from capmj.generate.static import extract_json
+    assert extract_json('{"goal": "stack them ... // high", "n": [1, 2, ...], // note\n}') == {
+        "goal": "stack them ... // high", "n": [1, 2]}
+    assert extract_json('[{"a": "x\\"y // z"},]') == [{"a": 'x"y // z'}]
+    with pytest.raises(ValueError):
+        extract_json('{"a": 1 "b": 2}')  # still not JSON: the original error

@@ -116,10 +116,19 @@ def _propose(ctx: Context, conv: Conversation, rec: CandidateRecord) -> dict[str
         colors=", ".join(DEFAULT_COLORS), warm=", ".join(c for c in DEFAULT_COLORS if c in WARM),
         cool=", ".join(c for c in DEFAULT_COLORS if c in COOL),
         accepted=_proposal_lines(ex["accepted"]), rejected=_proposal_lines(ex["rejected"]))
-    prop = extract_json(conv.ask(text, "generate.propose"))
-    if not isinstance(prop, dict) or not all(isinstance(prop.get(k), str) and prop[k] for k in ("name", "goal")):
-        raise ValueError(f"the proposal must be a JSON object with 'name' and 'goal', got {str(prop)[:200]}")
-    return prop
+    problem = ""
+    for purpose in ("generate.propose", "generate.propose_repair"):
+        answer = conv.ask(text, purpose)
+        try:
+            prop = extract_json(answer)
+        except ValueError as e:
+            problem = f"{type(e).__name__}: {e}"
+        else:
+            if isinstance(prop, dict) and all(isinstance(prop.get(k), str) and prop[k] for k in ("name", "goal")):
+                return prop
+            problem = f"the proposal must be a JSON object with 'name' and 'goal', got {str(prop)[:200]}"
+        text = prompts.render("propose_repair.txt", problem=problem)
+    raise ValueError(f"no usable proposal after the repair round: {problem}")
 
 
 EXAMPLES = 2

@@ -16,7 +16,7 @@ from capmj.agents.prompt_files import prompts_dir
 from capmj.errors import ConfigError
 
 FOLDER = "generator"
-FILES = ("system.txt", "propose.txt", "pick.txt", "task_api.txt", "examples.txt", "repair.txt", "reflect.txt", "proposals.json")
+FILES = ("system.txt", "propose.txt", "propose_repair.txt", "pick.txt", "task_api.txt", "examples.txt", "repair.txt", "reflect.txt", "proposals.json")
 
 
 def generator_dir() -> Path:

@@ -28,8 +28,43 @@ def extract_code(answer: str) -> str:
     return (max(blocks, key=len) if blocks else answer).strip() + "\n"
 
 
+def _without_js_extras(text: str) -> str:
+    """``text`` without what a small model adds to JSON: ``// comments``, ``...`` items, trailing commas.
+
+    Outside strings only (a goal text may hold "..." or a URL's ``//``)."""
+    out: list[str] = []
+    i, in_string = 0, False
+    while i < len(text):
+        c = text[i]
+        if in_string:
+            out.append(c)
+            if c == "\\" and i + 1 < len(text):
+                out.append(text[i + 1])
+                i += 1
+            elif c == '"':
+                in_string = False
+        elif c == '"':
+            in_string = True
+            out.append(c)
+        elif text.startswith("//", i):
+            while i < len(text) and text[i] != "\n":
+                i += 1
+            continue
+        elif text.startswith("...", i):
+            i += 3
+            continue
+        else:
+            out.append(c)
+        i += 1
+    return re.sub(r",(\s*(?:,\s*)*)([\]}])", r"\1\2", re.sub(r",\s*,", ",", "".join(out)))
+
+
 def extract_json(answer: str) -> Any:
-    """The first JSON value of an LLM answer (fenced or bare); raises ``ValueError``."""
+    """The first JSON value of an LLM answer (fenced or bare); raises ``ValueError``.
+
+    An answer that is JSON but for ``// comments``, ``...`` placeholders or trailing commas is read
+    without them: the shared 1.5B model's first bottom-up proposal was such an object, and the
+    candidate stopped at the proposal although the answer held one."""
     text = answer.strip()
     fenced = re.search(r"```(?:json)?\s*\n(.*?)```", text, re.DOTALL)
     if fenced:
@@ -37,8 +72,14 @@ def extract_json(answer: str) -> Any:
     starts = [i for i in (text.find("{"), text.find("[")) if i >= 0]
     if not starts:
         raise ValueError(f"no JSON value in the answer: {answer[:200]!r}")
-    value, _ = json.JSONDecoder().raw_decode(text[min(starts):])
-    return value
+    text = text[min(starts):]
+    try:
+        return json.JSONDecoder().raw_decode(text)[0]
+    except json.JSONDecodeError as exc:
+        try:
+            return json.JSONDecoder().raw_decode(_without_js_extras(text))[0]
+        except json.JSONDecodeError:
+            raise exc from None
 
 
 CONTEXT_LINES = 3
