@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 from collections import Counter
 from pathlib import Path
@@ -83,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         "reached": stage_table(rows),
         "stopped_by": dict(Counter(r["stopped_by"] for r in rows)),
         "failed_checks": dict(Counter(r["failed_check"] for r in rows if r["failed_check"])),
-        "wall_s_per_candidate": {"median": walls[len(walls) // 2] if walls else None,
+        "wall_s_per_candidate": {"median": statistics.median_high(walls) if walls else None,
                                  "max": walls[-1] if walls else None},
         "rows": rows,
     }

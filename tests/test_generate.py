@@ -322,5 +322,7 @@ def test_json_extras_are_dropped_only_outside_strings():
     assert extract_json('{"goal": "stack them ... // high", "n": [1, 2, ...], // note\n}') == {
         "goal": "stack them ... // high", "n": [1, 2]}
     assert extract_json('[{"a": "x\\"y // z"},]') == [{"a": 'x"y // z'}]
+    assert extract_json('[..., 1, ..., ..., 2, ...]') == [1, 2]  # the commas of several dropped items
+    assert extract_json('{"goal": "[, x , , ]", "n": [1, ...]}') == {"goal": "[, x , , ]", "n": [1]}
     with pytest.raises(ValueError):
         extract_json('{"a": 1 "b": 2}')  # still not JSON: the original error

@@ -115,9 +115,8 @@ class RecordsReporter:
         """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""
         report = self._fallback.judge(session, ctx, goal)
         errors += tuple(f"direct {e}" for e in report.errors)
-        if report.verdict is None:
-            return dataclasses.replace(report, source="unknown", errors=errors, error=errors[-1])
-        return dataclasses.replace(report, source="direct", errors=errors, error=errors[-1])
+        source = "unknown" if report.verdict is None else "direct"
+        return dataclasses.replace(report, source=source, errors=errors, error=errors[-1])
 
     def close(self) -> None:
         return None

@@ -31,9 +31,15 @@ def extract_code(answer: str) -> str:
 def _without_js_extras(text: str) -> str:
     """``text`` without what a small model adds to JSON: ``// comments``, ``...`` items, trailing commas.
 
-    Outside strings only (a goal text may hold "..." or a URL's ``//``)."""
+    Outside strings only (a goal text may hold "...", a URL's ``//`` or ", ,"): the commas left
+    around a dropped item are merged as they are written, never by a pass over the whole text."""
     out: list[str] = []
     i, in_string = 0, False
+
+    def last() -> str:
+        """The last character written that is not white space ("" at the start)."""
+        return next((ch for ch in reversed(out) if not ch.isspace()), "")
+
     while i < len(text):
         c = text[i]
         if in_string:
@@ -53,10 +59,18 @@ def _without_js_extras(text: str) -> str:
         elif text.startswith("...", i):
             i += 3
             continue
+        elif c == "," and last() in (",", "[", "{"):
+            pass  # a second comma, or one right after an opening bracket
+        elif c in "]}":
+            while out and out[-1].isspace():
+                out.pop()
+            if out and out[-1] == ",":
+                out.pop()
+            out.append(c)
         else:
             out.append(c)
         i += 1
-    return re.sub(r",(\s*(?:,\s*)*)([\]}])", r"\1\2", re.sub(r",\s*,", ",", "".join(out)))
+    return "".join(out)
 
 
 def extract_json(answer: str) -> Any:
