@@ -13,7 +13,7 @@ import pytest
 from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.bench.cli import main
-from capmj.judge.metrics import confusion, metrics
+from capmj.judge.metrics import confusion, contrast_counts, metrics
 
 TASKS = "stack-blocks-with-alternate-color,put-block-into-matching-bowl"
 SEEDS = "10001"
@@ -145,6 +145,21 @@ def test_metrics_by_hand() -> None:
     assert m["balanced_accuracy"] == pytest.approx(0.7) and m["verdict_rate"] == 0.9
     lo, hi = m["accuracy_ci"]
     assert lo == pytest.approx(0.3968, abs=1e-4) and hi == pytest.approx(0.8922, abs=1e-4)
+
+
+def test_contrasts_count_episodes_told_apart_and_episodes_judged_blind_to_the_state() -> None:
+    def rec(task: str, seed: int, label: bool, verdict: bool | None) -> dict[str, object]:
+        return {"task": task, "seed": seed, "label": label, "verdict": verdict}
+
+    recs = [rec("a", 1, True, True), rec("a", 1, False, False), rec("a", 1, False, False),  # told apart
+            rec("a", 2, True, False), rec("a", 2, False, False),                           # blind: both no
+            rec("b", 1, True, None), rec("b", 1, False, None),                             # blind: unknown
+            rec("b", 2, True, True), rec("b", 2, False, True), rec("b", 2, False, False),  # neither
+            rec("c", 1, True, True)]                                                       # no negative
+    assert contrast_counts(recs) == {"contrasts": 4, "contrasts_told_apart": 1, "contrasts_state_blind": 2}
+    m = metrics(recs)
+    assert (m["contrasts"], m["contrasts_told_apart"], m["contrasts_state_blind"]) == (4, 1, 2)
+    assert contrast_counts([rec("a", 1, True, True), rec("a", 2, False, False)])["contrasts"] == 0
 
 
 def test_report_compares_two_scripted_reporters_on_the_same_states_with_mcnemar(

@@ -93,16 +93,19 @@ def _pct(v: float | None) -> str:
 def markdown(summary: dict[str, Any]) -> str:
     """The short human report: one table per grouping (overall, tasks, kinds)."""
     head = ("| group | n | pos | neg | accuracy | balanced acc. | precision | recall | specificity | verdicts | "
-            "sources (code/repair/direct/unknown) |\n|---|---|---|---|---|---|---|---|---|---|---|\n")
+            "sources (code/repair/direct/unknown) | contrasts told apart / blind |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
 
     def row(name: str, m: dict[str, Any]) -> str:
         s = m["verdict_sources"]
         src = "/".join(str(s.get(k, 0)) for k in ("code", "repair", "direct", "unknown"))
         if s.get("predicate"):
             src += f" (+{s['predicate']} predicate)"
+        contrasts = (f"{m['contrasts_told_apart']} / {m['contrasts_state_blind']} of {m['contrasts']}"
+                     if m["contrasts"] else "–")
         return (f"| {name} | {m['n']} | {m['positives']} | {m['negatives']} | {_pct(m['accuracy'])} | "
                 f"{_pct(m['balanced_accuracy'])} | {_pct(m['precision'])} | {_pct(m['recall'])} | "
-                f"{_pct(m['specificity'])} | {_pct(m['verdict_rate'])} | {src} |\n")
+                f"{_pct(m['specificity'])} | {_pct(m['verdict_rate'])} | {src} | {contrasts} |\n")
 
     o = summary["overall"]
     out = [f"# Reporter judgement: {summary['reporter']}\n\n",

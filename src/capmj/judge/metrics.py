@@ -10,6 +10,15 @@ has more negatives than positives: an always-"no" reporter scores its negative s
 but 0.5 here.  Every proportion comes with its 95 % Wilson interval.  ``high_confidence`` counts the
 verdicts :func:`capmj.agents.confidence.assess` trusts (the ones the ``careful`` loop acts on) and
 ``high_confidence_accuracy`` is their share of right answers.
+
+Balanced accuracy can hide a reporter that does not look at the scene: one that answers each goal
+the same way whatever the state scores 0.5 per task and can look fair overall.  So each group also
+counts its **contrasts**, the (task, seed) episodes with both an achieved and a failed state judged:
+``contrasts_told_apart`` is the number whose every achieved state got True and every failed state
+False, ``contrasts_state_blind`` the number whose states all got the same verdict (unknown included).
+The shared 1.5B model's ``records`` checks gave the positive and the negative of one episode the
+same verdict in 15 of 19 contrasts (seed 10001; the ``checked`` answers too): the verdict depended on
+the goal, not on the state.
 """
 
 from __future__ import annotations
@@ -19,7 +28,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from capmj.agents.verdict import SOURCES
 from capmj.bench.results import wilson
 
-__all__ = ["RECORD_FIELDS", "confusion", "group_metrics", "metrics"]
+__all__ = ["RECORD_FIELDS", "confusion", "contrast_counts", "group_metrics", "metrics"]
 
 RECORD_FIELDS: dict[str, str] = {
     "task": "task name", "seed": "episode seed", "case": "case name within (task, seed)",
@@ -63,6 +72,21 @@ def confusion(records: Iterable[Mapping[str, Any]]) -> dict[str, int]:
     return c
 
 
+def contrast_counts(records: Iterable[Mapping[str, Any]]) -> dict[str, int]:
+    """``contrasts``, ``contrasts_told_apart`` and ``contrasts_state_blind`` (see the module docstring)."""
+    episodes: dict[tuple[str, int], list[Mapping[str, Any]]] = {}
+    for r in records:
+        episodes.setdefault((str(r.get("task")), int(r.get("seed") or 0)), []).append(r)
+    c = {"contrasts": 0, "contrasts_told_apart": 0, "contrasts_state_blind": 0}
+    for recs in episodes.values():
+        if len({bool(r["label"]) for r in recs}) < 2:
+            continue
+        c["contrasts"] += 1
+        c["contrasts_told_apart"] += all(r.get("verdict") is bool(r["label"]) for r in recs)
+        c["contrasts_state_blind"] += len({r.get("verdict") for r in recs}) == 1
+    return c
+
+
 def metrics(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     """The figures of one group of judged states (see the module docstring); None where undefined."""
     c = confusion(records)
@@ -88,6 +112,7 @@ def metrics(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         "positive_share": _rate(pos, n),
         "verdict_rate": _rate(reached, n), "verdict_rate_ci": _ci(reached, n),
         "verdict_sources": {k: v for k, v in sources.items() if v or k in SOURCES},
+        **contrast_counts(records),
         "high_confidence": len(high),
         "high_confidence_accuracy": _rate(sum(1 for r in high if r.get("correct")), len(high)),
         "label_mismatches": sum(1 for r in records if r.get("predicate") is not None and r["predicate"] != r["label"]),
