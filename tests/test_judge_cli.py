@@ -228,3 +228,8 @@ def test_from_a_run_judges_its_final_states_labelled_by_the_predicate(tmp_path: 
     assert any(s["kind"] == "run" and "no final_poses" in s["reason"] for s in skipped)
     kinds = json.loads((out / "summary.json").read_text())["kinds"]
     assert kinds["run"]["n"] == 2 and kinds["run"]["accuracy"] == 1.0
+    only = tmp_path / "only"  # --kinds run: the run's states alone, no synthetic set
+    assert main(["judge", "--tasks", "put-block-into-matching-bowl", "--seeds", SEEDS, "--kinds", "run",
+                 "--from", str(run), "--reporter", "predicate", "--out", str(only), "--no-progress"]) == 0
+    assert [c["case"] for c in map(json.loads, (only / "cases.jsonl").read_text().splitlines())] == ["run1", "run2"]
+    assert main(["judge", "--kinds", "run", "--reporter", "predicate", "--out", str(only), "--no-progress"]) == 2

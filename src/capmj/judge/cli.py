@@ -51,7 +51,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", default=DEFAULT_SEEDS, metavar="SEEDS",
                    help=f"seeds '1,3,5' and/or 'start:stop[:step]' (default: {DEFAULT_SEEDS})")
     p.add_argument("--kinds", default=",".join(KINDS), metavar="K,...",
-                   help=f"case kinds to build (default: all: {', '.join(KINDS)})")
+                   help=f"case kinds to build (default: all: {', '.join(KINDS)}); with --from, 'run' alone "
+                        "judges only the run's final states")
     p.add_argument("--reporter", default="text", choices=JUDGE_REPORTERS,
                    help="text / vlm: the closed loop's reporters; predicate: the task predicate (a reference)")
     p.add_argument("--reporter-prompt", dest="reporter_prompt", default="thesis", choices=REPORTER_PROMPTS,
@@ -77,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"stop judging once the run's LLM cost reaches USD (exit {EXIT_BUDGET})")
     p.add_argument("--from", dest="from_run", type=Path, default=None, metavar="RUN_DIR",
                    help="also judge the final states of every episode of a bench result folder (kind 'run', "
-                        "labelled by the task predicate)")
+                        "labelled by the task predicate); --kinds run: those states only")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="result folder")
     p.add_argument("--log", action="store_true",
                    help="write DIR/rrd/<task>/<seed>-<case>.rrd per judged state: the state, the reporter's "
@@ -152,22 +153,28 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
                          price=args.price, reporter_prompt=args.reporter_prompt)
     if args.per_task is not None and args.per_task < 1:
         raise ConfigError(f"--per-task must be >= 1, got {args.per_task}")
+    from capmj.judge.fromrun import RUN_KIND, run_cases
+
+    if RUN_KIND in kinds and args.from_run is None:
+        raise ConfigError(f"--kinds {RUN_KIND} needs --from RUN_DIR (the run whose final states to judge)")
+    synthetic = tuple(k for k in kinds if k != RUN_KIND)
     out: Path = args.out
     judge = Judge(config, log_dir=out / "rrd" if args.log else None)
     out.mkdir(parents=True, exist_ok=True)
-    try:
-        the_set = build_set(tasks, seeds, kinds=kinds, progress=not args.no_progress)
-    except ValueError as exc:
-        raise ConfigError(str(exc)) from None
-    cases = list(the_set.cases)
-    if args.per_task is not None:
-        from capmj.judge.subset import stratified
+    cases: list[Any] = []
+    skipped: list[dict[str, Any]] = []
+    if synthetic:  # `--from R --kinds run`: only the run's states, no set to build
+        try:
+            the_set = build_set(tasks, seeds, kinds=synthetic, progress=not args.no_progress)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+        cases = list(the_set.cases)
+        if args.per_task is not None:
+            from capmj.judge.subset import stratified
 
-        cases = stratified(cases, args.per_task)
-    skipped = [s.__dict__ for s in the_set.skipped]
+            cases = stratified(cases, args.per_task)
+        skipped = [s.__dict__ for s in the_set.skipped]
     if args.from_run is not None:
-        from capmj.judge.fromrun import RUN_KIND, run_cases
-
         extra, problems = run_cases(args.from_run)
         cases += extra
         skipped += [{"kind": RUN_KIND, "reason": p} for p in problems]
