@@ -232,4 +232,5 @@ def test_from_a_run_judges_its_final_states_labelled_by_the_predicate(tmp_path: 
     assert main(["judge", "--tasks", "put-block-into-matching-bowl", "--seeds", SEEDS, "--kinds", "run",
                  "--from", str(run), "--reporter", "predicate", "--out", str(only), "--no-progress"]) == 0
     assert [c["case"] for c in map(json.loads, (only / "cases.jsonl").read_text().splitlines())] == ["run1", "run2"]
+    assert json.loads((only / "summary.json").read_text())["pairs"] == 1  # the episodes judged, not --tasks x --seeds
     assert main(["judge", "--kinds", "run", "--reporter", "predicate", "--out", str(only), "--no-progress"]) == 2

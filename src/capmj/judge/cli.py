@@ -184,7 +184,7 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     _write_jsonl(out / "judged.jsonl", records)
     _write_jsonl(out / "transcripts.jsonl", transcripts)
     summary: dict[str, Any] = {"reporter": config.label, "reporter_prompt": config.reporter_prompt,
-               "per_task": args.per_task, "set_digest": set_digest(cases), "pairs": len(tasks) * len(seeds),
+               "per_task": args.per_task, "set_digest": set_digest(cases), "pairs": len({(c.task, c.seed) for c in cases}),
                "cases": len(cases), "judged": len(records), "skipped": len(skipped), "stopped": stopped,
                "overall": metrics(records), "tasks": group_metrics(records, lambda r: str(r["task"])),
                "kinds": group_metrics(records, lambda r: str(r["kind"]))}
