@@ -71,6 +71,7 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "achieved_but_names_wrong": Report("text", True, "yes", wrong=(block.name,)),
         "no_verdict": Report("text", None, ""),
         "direct_fallback": Report("text", False, "no", source="direct", wrong=(block.name,)),
+        "copies_example": Report("text", False, "no", wrong=(block.name,), copied=True),
     }
     for why, report in cases.items():
         a = assess(report, objects)
@@ -165,3 +166,25 @@ def test_judge_per_task_judges_that_subset(tmp_path: Path) -> None:
         assert any(not r["label"] for r in mine)
     cases = [json.loads(line) for line in (tmp_path / "out" / "cases.jsonl").read_text().splitlines()]
     assert [c["case"] for c in cases] == [r["case"] for r in judged]
+
+
+def test_an_answer_that_repeats_the_prompts_example_is_low_confidence(server: StubLLMServer, tmp_path: Path) -> None:
+    """The example block of ``prompts/reporter_checked.txt``, sent back as the answer (what the 1.5B
+    model did on 22 of 39 states), is marked ``copies_example``; a reason of the model's own is not."""
+    template = (Path(__file__).resolve().parent.parent / "prompts" / "reporter_checked.txt").read_text()
+    example = re.findall(r"```python\n(.*?)```", template, re.S)[-1]
+    assert "reason = " in example
+
+    def answer(request: dict[str, Any]) -> str:
+        if "put-block" in json.dumps(request) or "bowl" in prompt_text(request).split("Goal: ")[-1]:
+            return code(example)
+        return code("judge = False\nreason = 'the two top blocks have the same colour'\n"
+                    "wrong = ['movable small red block with obj_id 3']")
+
+    server.respond_with(answer)
+    rc, s, judged = judge(tmp_path, "--reporter", "text", "--reporter-prompt", "checked", "--model", "openai/stub",
+                          "--api-base", server.base_url, "--llm-timeout", "10", "--kinds", "oracle")
+    assert rc == 0 and len(judged) == 2
+    by_task = {r["task"]: r for r in judged}
+    assert by_task["put-block-into-matching-bowl"]["low_confidence"] == "copies_example"
+    assert by_task["stack-blocks-with-alternate-color"]["low_confidence"] != "copies_example"

@@ -16,7 +16,9 @@ plain question after the model's checking code failed twice) is low-confidence w
 it is the ``records`` prompt's fallback to the ``checked`` question, whose verdicts that named a
 movable object agreed with the predicate on 53-56 % of the judge set's states with the shared 1.5B
 model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; acting on it would
-re-plan achieved states at chance.  The ``careful`` loop
+re-plan achieved states at chance.  A verdict whose reason copies the prompt's own example
+(``Report.copied``, set by :class:`~capmj.agents.reporter_checked.CheckedReporter`) is no evidence
+about the scene either.  The ``careful`` loop
 (:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
 """
@@ -40,6 +42,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "names_only_fixed": "not achieved, but it names only objects the robot cannot move (they are where they started)",
     "achieved_but_names_wrong": "achieved, yet it names objects as wrong",
     "direct_fallback": "the verdict came from the direct question after the reporter's checks failed",
+    "copies_example": "its reason is the prompt's own example, word for word",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 
@@ -62,6 +65,8 @@ def assess(report: Report | None, objects: Sequence[ObjectSpec]) -> Assessment:
         return Assessment("low", "no_verdict")
     if report.source == "direct":
         return Assessment("low", "direct_fallback")
+    if report.copied:
+        return Assessment("low", "copies_example")
     named = [resolve_name(n, objects) for n in report.wrong]
     real = [o for o in named if o is not None]
     movable = tuple(dict.fromkeys(o.obj_id for o in real if not o.fixed))

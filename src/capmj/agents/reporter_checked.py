@@ -16,10 +16,17 @@ An answer without a verdict gets one repair request in the same conversation; st
 Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — no ``direct`` fallback,
 since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
 real objects?) is :func:`capmj.agents.confidence.assess`, applied to either prompt's verdict.
+
+A verdict whose reason is the prompt file's own example word for word is marked ``copied`` (low
+confidence, ``copies_example``).  Why: 22 of the shared 1.5B model's 39 answers on the judge's
+seed-10001 subset were the example ("the red block rests on the table, not on the blue block",
+naming obj_id 3) whatever the state, right on 12, and 15 of them counted as high-confidence
+because obj_id 3 is a movable object in many scenes: the ``careful`` loop re-planned on them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from capmj.agents.lmp import LMPSession, prompts_dir
@@ -30,6 +37,10 @@ from capmj.errors import ConfigError
 __all__ = ["PROMPT_FILE", "CheckedReporter"]
 
 PROMPT_FILE = "reporter_checked.txt"
+
+MIN_COPIED_CHARS = 20
+"""A reason at least this long found word for word in the prompt file is its example copied
+(shorter ones, such as "all blocks are in place", can match by chance)."""
 
 
 class CheckedReporter:
@@ -44,16 +55,19 @@ class CheckedReporter:
     def start(self, ctx: Any) -> None:  # nothing to capture before acting
         return None
 
-    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
-        """The prompt: the template with the measured facts and the goal filled in."""
+    def template(self, session: LMPSession) -> str:
+        """The prompt file's text, with its ``<<FACTS>>`` and ``<<GOAL>>`` slots."""
         folder = self.directory if self.directory is not None else (
             session.directory if session.directory is not None else prompts_dir())
         try:
-            template = (folder / PROMPT_FILE).read_text(encoding="utf-8")
+            return (folder / PROMPT_FILE).read_text(encoding="utf-8")
         except FileNotFoundError:
             raise ConfigError(f"checked reporter prompt {folder / PROMPT_FILE} not found") from None
+
+    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
+        """The prompt: the template with the measured facts and the goal filled in."""
         facts = scene_facts(state_from_api(session.api, ctx.world.objects))
-        return template.replace("<<FACTS>>", facts_text(facts)).replace("<<GOAL>>", " ".join(goal.split()))
+        return self.template(session).replace("<<FACTS>>", facts_text(facts)).replace("<<GOAL>>", " ".join(goal.split()))
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
         messages = session.messages(self.question(session, ctx, goal))
@@ -61,9 +75,12 @@ class CheckedReporter:
             session, self.mode, lambda source: session.next_call("reporter_checked", goal), messages,
             "Answer only with one ```python block that sets judge = True or False, reason = a short explanation and "
             "wrong = [full names of the objects whose facts break the goal].")
-        if report is not None:
-            return report
-        return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
+        if report is None:
+            return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
+        reason = " ".join(report.reason.split())
+        if len(reason) >= MIN_COPIED_CHARS and reason in " ".join(self.template(session).split()):
+            return dataclasses.replace(report, copied=True)
+        return report
 
     def close(self) -> None:
         return None

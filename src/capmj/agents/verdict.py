@@ -51,6 +51,8 @@ class Report:
     """Objects whose state the reporter says is wrong (when it named them)."""
     errors: tuple[str, ...] = ()
     """Every problem met on the way, in order (``"code: ..."``, ``"repair: ..."``, ...)."""
+    copied: bool = False
+    """The answer's reason is the prompt's own example, word for word: it says nothing of this scene."""
 
     def text(self) -> str:
         word = {True: "ACHIEVED", False: "NOT ACHIEVED", None: "UNKNOWN"}[self.verdict]
