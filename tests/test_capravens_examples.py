@@ -3,13 +3,10 @@ text): how it splits examples and how it classifies each kind of outcome on real
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
 
 import pytest
+from module_loader import ROOT, load_module
 
-ROOT = Path(__file__).resolve().parents[1]
 
 PLANNER = """# header the harness skips
 # ---------------------------------------------------------------------------
@@ -56,11 +53,7 @@ judge = object_positions['red block with obj_id 1'][0][2] < 0.05
 
 @pytest.fixture(scope="module")
 def harness():
-    spec = importlib.util.spec_from_file_location("capravens_examples", ROOT / "benchmarks" / "capravens_examples.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["capravens_examples"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_module(ROOT / "benchmarks" / "capravens_examples.py", register=True)
 
 
 def test_split_keeps_contexts_queries_and_code(harness):

@@ -4,25 +4,18 @@ predicate on the same state."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 import pytest
+from module_loader import ROOT, load_module
 
 from capmj.records.attempt import AttemptRecord
 
-SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "closed_loop_pair.py"
-
-
 def load_script() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("closed_loop_pair", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_module(ROOT / "benchmarks" / "closed_loop_pair.py")
 
 
 def write_run(folder: Path, episodes: list[tuple[str, bool, list[AttemptRecord]]]) -> Path:

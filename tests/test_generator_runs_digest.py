@@ -3,24 +3,17 @@ records the generator writes (``CandidateRecord.to_dict``) and sorts each stop b
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+from module_loader import ROOT, load_module
 
 from capmj.generate.candidate import CandidateRecord
 
-SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "generator_runs.py"
-
-
 def load_script() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("generator_runs", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_module(ROOT / "benchmarks" / "generator_runs.py")
 
 
 def test_the_digest_counts_stages_reached_and_whose_fault_each_stop_was(tmp_path: Path,

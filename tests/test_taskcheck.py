@@ -6,7 +6,6 @@ in this process: they are our own fixtures, not LLM output.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
@@ -17,13 +16,11 @@ from capmj.sim.objects import ObjectSpec
 from capmj.taskcheck import CHECKS, CheckConfig, check_task, goal_text_problems
 from capmj.tasks.protocol import Scene
 from generator_script import CANDIDATES
+from module_loader import load_module
 
 
 def load(file: str):
-    spec = importlib.util.spec_from_file_location(f"cand_{file[:-3]}", CANDIDATES / file)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.TASK
+    return load_module(CANDIDATES / file, f"cand_{file[:-3]}").TASK
 
 
 def test_goal_text_names_only_what_exists():
@@ -64,9 +61,7 @@ def test_the_old_scene_method_name_passes_for_plugins_and_fails_where_refused(tm
     code = (CANDIDATES / "good_zone_color.py").read_text().replace("def sample_scene(", "def generate(")
     path = tmp_path / "old_name.py"
     path.write_text(code)
-    spec = importlib.util.spec_from_file_location("cand_old_name", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_module(path, "cand_old_name")
     with pytest.warns(DeprecationWarning, match="sample_scene"):
         allowed = check_task(module.TASK, CheckConfig.first(2), checks=("protocol", "scenes"))
     assert allowed.passed and "deprecated: 'generate' is the old name of 'sample_scene'" in allowed.results[0].detail
