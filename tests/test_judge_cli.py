@@ -234,3 +234,23 @@ def test_from_a_run_judges_its_final_states_labelled_by_the_predicate(tmp_path: 
     assert [c["case"] for c in map(json.loads, (only / "cases.jsonl").read_text().splitlines())] == ["run1", "run2"]
     assert json.loads((only / "summary.json").read_text())["pairs"] == 1  # the episodes judged, not --tasks x --seeds
     assert main(["judge", "--kinds", "run", "--reporter", "predicate", "--out", str(only), "--no-progress"]) == 2
+
+
+def test_summarize_rewrites_a_finished_summary_byte_for_byte_and_summarizes_a_killed_run(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    assert main(["judge", "--tasks", TASKS, "--seeds", SEEDS, "--out", str(out), "--reporter", "predicate",
+                 "--kinds", "oracle,displaced", "--no-progress"]) == 0
+    finished = (out / "summary.json").read_bytes()
+    assert main(["judge", "summarize", str(out)]) == 0
+    assert (out / "summary.json").read_bytes() == finished
+    lines = (out / "judged.jsonl").read_text().splitlines()
+    assert len(lines) >= 2
+    (out / "judged.jsonl").write_text(lines[0] + "\n")  # a run killed after its first state
+    for name in ("summary.json", "summary.md", "config.json"):
+        (out / name).unlink()
+    assert main(["judge", "summarize", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["overall"]["n"] == 1 and summary["cases"] == len(lines)
+    assert summary["stopped"] == f"interrupted: 1 of {len(lines)} states judged (summarized from judged.jsonl)"
+    assert "**Stopped early:** interrupted" in (out / "summary.md").read_text()
+    assert main(["judge", "summarize", str(tmp_path / "nothing")]) == 2

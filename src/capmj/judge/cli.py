@@ -7,7 +7,8 @@ state), ``summary.json`` (``overall``, ``tasks.<task>``, ``kinds.<kind>``: ``n``
 ``negatives``, ``accuracy``, ``balanced_accuracy``, ``precision``, ``recall``, ``verdict_rate``, ...;
 see :mod:`capmj.judge.metrics`), ``summary.md`` and ``config.json``.  Exit codes as the bench's:
 0 done, 2 bad input, 3 stopped by --max-tokens / --max-cost-usd.  ``judge report A B`` compares two
-runs (:mod:`capmj.judge.compare`).
+runs (:mod:`capmj.judge.compare`); ``judge summarize DIR`` writes the summary of a killed run from
+the states it judged.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
                "  python -m capmj.bench judge --reporter predicate --out runs/judge-ref      # the ceiling\n"
                "  python -m capmj.bench judge --reporter text --model openai/qwen2.5-coder-1.5b \\\n"
                "      --api-base http://127.0.0.1:8080/v1 --llm-cache /tmp/llm/cache --out runs/judge-qwen\n"
-               "  python -m capmj.bench judge report runs/judge-a runs/judge-b   # paired McNemar test",
+               "  python -m capmj.bench judge report runs/judge-a runs/judge-b   # paired McNemar test\n"
+               "  python -m capmj.bench judge summarize runs/judge-a   # the summary of a killed run",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--tasks", default=DEFAULT_TASKS, metavar="SEL",
                    help=f"task names or tags, comma-separated (default: {DEFAULT_TASKS})")
@@ -131,12 +133,65 @@ def _write_jsonl(path: Path, rows: Sequence[dict[str, Any]]) -> None:
     _write_text(path, "".join(json.dumps(r, sort_keys=True) + "\n" for r in rows))
 
 
+def write_summary(out: Path, records: Sequence[dict[str, Any]], cases: Sequence[Any], skipped: int, *,
+                  reporter: str, reporter_prompt: str | None, per_task: int | None, stopped: str | None
+                  ) -> dict[str, Any]:
+    """Write ``summary.json`` and ``summary.md`` of the judged ``records`` of ``cases``; the summary."""
+    from capmj.judge.cases import set_digest
+    from capmj.judge.metrics import group_metrics, metrics
+
+    summary: dict[str, Any] = {
+        "reporter": reporter, "reporter_prompt": reporter_prompt, "per_task": per_task,
+        "set_digest": set_digest(list(cases)), "pairs": len({(c.task, c.seed) for c in cases}),
+        "cases": len(cases), "judged": len(records), "skipped": skipped, "stopped": stopped,
+        "overall": metrics(records), "tasks": group_metrics(records, lambda r: str(r["task"])),
+        "kinds": group_metrics(records, lambda r: str(r["kind"]))}
+    _write_text(out / "summary.json", json.dumps(summary, indent=2, sort_keys=True) + "\n")
+    _write_text(out / "summary.md", markdown(summary))
+    return summary
+
+
+def _read_jsonl(path: Path) -> list[dict[str, Any]]:
+    try:
+        return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
+    except FileNotFoundError:
+        raise ConfigError(f"{path} not found; give the --out folder of a judge run") from None
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"{path}: not JSON lines ({exc})") from None
+
+
+def summarize(argv: Sequence[str]) -> int:
+    """``judge summarize DIR``: rewrite the summary of a judge run from its ``judged.jsonl``.
+
+    A killed run (a slow model, a session that ended) has every verdict it reached in
+    ``judged.jsonl`` and the set in ``cases.jsonl``, but no summary; this writes it, with
+    ``stopped`` saying how many states were judged.  It also refreshes the summary of a finished
+    run after the figures gained a key."""
+    from capmj.judge.cases import JudgeCase
+
+    p = argparse.ArgumentParser(prog="python -m capmj.bench judge summarize", description=summarize.__doc__)
+    p.add_argument("dir", type=Path, help="the --out folder of a judge run")
+    out = p.parse_args(list(argv)).dir
+    cases = [JudgeCase.from_dict(c) for c in _read_jsonl(out / "cases.jsonl")]
+    records = _read_jsonl(out / "judged.jsonl")
+    if not records:
+        raise ConfigError(f"{out / 'judged.jsonl'} has no judged state")
+    config = json.loads((out / "config.json").read_text()) if (out / "config.json").is_file() else {}
+    skipped = len(_read_jsonl(out / "skipped.jsonl")) if (out / "skipped.jsonl").is_file() else 0
+    stopped = None if len(records) >= len(cases) else (
+        f"interrupted: {len(records)} of {len(cases)} states judged (summarized from judged.jsonl)")
+    summary = write_summary(out, records, cases, skipped, reporter=str(records[0].get("reporter")),
+                            reporter_prompt=records[0].get("reporter_prompt"),
+                            per_task=config.get("per_task"), stopped=stopped)
+    print(f"summarized {len(records)}/{len(cases)} judged states: balanced accuracy "
+          f"{_pct(summary['overall']['balanced_accuracy'])}; wrote {out / 'summary.md'}", file=sys.stderr)
+    return 0
+
+
 def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     from capmj.bench.seeds import parse_seeds
-    from capmj.judge.cases import set_digest
     from capmj.judge.evaluate import Judge, JudgeConfig
     from capmj.judge.judgeset import build_set
-    from capmj.judge.metrics import group_metrics, metrics
     from capmj.tasks import registry
 
     seeds = parse_seeds(args.seeds)
@@ -183,13 +238,8 @@ def run(args: argparse.Namespace, argv: Sequence[str]) -> int:
     records, transcripts, stopped = _judge_all(judge, cases, args, out)
     _write_jsonl(out / "judged.jsonl", records)
     _write_jsonl(out / "transcripts.jsonl", transcripts)
-    summary: dict[str, Any] = {"reporter": config.label, "reporter_prompt": config.reporter_prompt,
-               "per_task": args.per_task, "set_digest": set_digest(cases), "pairs": len({(c.task, c.seed) for c in cases}),
-               "cases": len(cases), "judged": len(records), "skipped": len(skipped), "stopped": stopped,
-               "overall": metrics(records), "tasks": group_metrics(records, lambda r: str(r["task"])),
-               "kinds": group_metrics(records, lambda r: str(r["kind"]))}
-    _write_text(out / "summary.json", json.dumps(summary, indent=2, sort_keys=True) + "\n")
-    _write_text(out / "summary.md", markdown(summary))
+    summary = write_summary(out, records, cases, len(skipped), reporter=config.label,
+                            reporter_prompt=config.reporter_prompt, per_task=args.per_task, stopped=stopped)
     _write_text(out / "config.json", json.dumps({"argv": list(argv), "tasks": tasks, "seeds": seeds,
                                                        "kinds": kinds, "per_task": args.per_task,
                                                        "config": config.__dict__},
@@ -249,9 +299,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from capmj.judge.compare import main as compare_main
 
         return compare_main(argv[1:])
-    args = build_parser().parse_args(argv)
     try:
-        return run(args, argv)
+        if argv and argv[0] == "summarize":
+            return summarize(argv[1:])
+        return run(build_parser().parse_args(argv), argv)
     except ConfigError as exc:
         print(f"capmj-bench judge: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
