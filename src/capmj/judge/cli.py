@@ -178,8 +178,9 @@ def summarize(argv: Sequence[str]) -> int:
         raise ConfigError(f"{out / 'judged.jsonl'} has no judged state")
     config = json.loads((out / "config.json").read_text()) if (out / "config.json").is_file() else {}
     skipped = len(_read_jsonl(out / "skipped.jsonl")) if (out / "skipped.jsonl").is_file() else 0
-    stopped = None if len(records) >= len(cases) else (
-        f"interrupted: {len(records)} of {len(cases)} states judged (summarized from judged.jsonl)")
+    before = json.loads((out / "summary.json").read_text()) if (out / "summary.json").is_file() else {}
+    stopped = before.get("stopped") or (None if len(records) >= len(cases) else (  # a budget stop keeps its reason
+        f"interrupted: {len(records)} of {len(cases)} states judged (summarized from judged.jsonl)"))
     summary = write_summary(out, records, cases, skipped, reporter=str(records[0].get("reporter")),
                             reporter_prompt=records[0].get("reporter_prompt"),
                             per_task=config.get("per_task"), stopped=stopped)
