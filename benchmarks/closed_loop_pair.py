@@ -24,17 +24,14 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from capmj.bench.results import read_results
 from capmj.bench.stats import mcnemar_exact
 
 
 def episodes(run_dir: Path) -> dict[tuple[str, int], dict[str, Any]]:
-    """The run's episode records by (task, seed); a later line for the same episode wins."""
-    out: dict[tuple[str, int], dict[str, Any]] = {}
-    for line in (run_dir / "episodes.jsonl").read_text(encoding="utf-8").splitlines():
-        if line.strip():
-            rec = json.loads(line)
-            out[(str(rec["task"]), int(rec["seed"]))] = rec
-    return out
+    """The run's episode records by (task, seed), read by the bench's own reader: a line a running
+    bench is still writing is skipped, a later line for the same episode wins."""
+    return {(str(r["task"]), int(r["seed"])): r for r in read_results(run_dir / "episodes.jsonl")[0]}
 
 
 def verdict_counts(attempts: list[dict[str, Any]]) -> dict[str, int]:

@@ -13,18 +13,21 @@ import pytest
 from module_loader import ROOT, load_module
 
 from capmj.records.attempt import AttemptRecord
+from capmj.records.episode import EpisodeRecord
+from capmj.records.notes import LLMNotes
 
 def load_script() -> ModuleType:
     return load_module(ROOT / "benchmarks" / "closed_loop_pair.py")
 
 
 def write_run(folder: Path, episodes: list[tuple[str, bool, list[AttemptRecord]]]) -> Path:
+    """A bench result folder of real episode records, the last line cut short as by a running bench."""
     folder.mkdir()
-    lines = [json.dumps({"task": task, "seed": 1, "success": ok, "failure": None if ok else "wrong_plan",
-                         "wall_s": 2.0, "llm": {"attempts": [a.to_dict() for a in attempts],
-                                                "prompt_tokens": 10, "completion_tokens": 5}})
-             for task, ok, attempts in episodes]
-    (folder / "episodes.jsonl").write_text("\n".join(lines) + "\n")
+    lines = [json.dumps(EpisodeRecord(
+        task, 1, "llm", "openai/stub", ok, 1.0 if ok else 0.0, 0.0, 0, len(attempts), 0.0, 2.0, None,
+        llm=LLMNotes("openai/stub", attempts=tuple(attempts), prompt_tokens=10, completion_tokens=5),
+        failure=None if ok else "wrong_plan").to_dict()) for task, ok, attempts in episodes]
+    (folder / "episodes.jsonl").write_text("\n".join(lines) + "\n" + lines[0][:40])
     return folder
 
 
