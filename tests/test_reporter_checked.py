@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 from llm_stub_server import StubLLMServer, prompt_text
+from module_loader import ROOT
 
 from capmj.agents.confidence import LOW_CONFIDENCE, assess
 from capmj.agents.reporter import Report
@@ -171,7 +172,7 @@ def test_judge_per_task_judges_that_subset(tmp_path: Path) -> None:
 def test_an_answer_that_repeats_the_prompts_example_is_low_confidence(server: StubLLMServer, tmp_path: Path) -> None:
     """The example block of ``prompts/reporter_checked.txt``, sent back as the answer (what the 1.5B
     model did on 22 of 39 states), is marked ``copies_example``; a reason of the model's own is not."""
-    template = (Path(__file__).resolve().parent.parent / "prompts" / "reporter_checked.txt").read_text()
+    template = (ROOT / "prompts" / "reporter_checked.txt").read_text()
     example = re.findall(r"```python\n(.*?)```", template, re.S)[-1]
     assert "reason = " in example
 

@@ -64,13 +64,15 @@ class CheckedReporter:
         except FileNotFoundError:
             raise ConfigError(f"checked reporter prompt {folder / PROMPT_FILE} not found") from None
 
-    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
-        """The prompt: the template with the measured facts and the goal filled in."""
+    def question(self, session: LMPSession, ctx: Any, goal: str, template: str | None = None) -> str:
+        """The prompt: the template (read when not given) with the measured facts and the goal filled in."""
         facts = scene_facts(state_from_api(session.api, ctx.world.objects))
-        return self.template(session).replace("<<FACTS>>", facts_text(facts)).replace("<<GOAL>>", " ".join(goal.split()))
+        text = self.template(session) if template is None else template
+        return text.replace("<<FACTS>>", facts_text(facts)).replace("<<GOAL>>", " ".join(goal.split()))
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
-        messages = session.messages(self.question(session, ctx, goal))
+        template = self.template(session)
+        messages = session.messages(self.question(session, ctx, goal, template))
         report, errors = ask_verdict(
             session, self.mode, lambda source: session.next_call("reporter_checked", goal), messages,
             "Answer only with one ```python block that sets judge = True or False, reason = a short explanation and "
@@ -78,7 +80,7 @@ class CheckedReporter:
         if report is None:
             return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
         reason = " ".join(report.reason.split())
-        if len(reason) >= MIN_COPIED_CHARS and reason in " ".join(self.template(session).split()):
+        if len(reason) >= MIN_COPIED_CHARS and reason in " ".join(template.split()):
             return dataclasses.replace(report, copied=True)
         return report
 
