@@ -72,7 +72,8 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "achieved_but_names_wrong": Report("text", True, "yes", wrong=(block.name,)),
         "no_verdict": Report("text", None, ""),
         "direct_fallback": Report("text", False, "no", source="direct", wrong=(block.name,)),
-        "copies_example": Report("text", False, "no", wrong=(block.name,), copied=True),
+        "copies_example": Report("text", False, "no", wrong=(block.name,), doubt="copies_example"),
+        "holds_at_start": Report("text", True, "yes", doubt="holds_at_start"),
     }
     for why, report in cases.items():
         a = assess(report, objects)

@@ -17,8 +17,9 @@ it is the ``records`` prompt's fallback to the ``checked`` question, whose verdi
 movable object agreed with the predicate on 53-56 % of the judge set's states with the shared 1.5B
 model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; acting on it would
 re-plan achieved states at chance.  A verdict whose reason copies the prompt's own example
-(``Report.copied``, set by :class:`~capmj.agents.reporter_checked.CheckedReporter`) is no evidence
-about the scene either.  The ``careful`` loop
+(``Report.doubt``, set by :class:`~capmj.agents.reporter_checked.CheckedReporter`) is no evidence
+about the scene either, nor is a check that says "achieved" of the scene the robot started from
+(:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`): no task's goal holds there.  The ``careful`` loop
 (:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
 """
@@ -43,6 +44,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "achieved_but_names_wrong": "achieved, yet it names objects as wrong",
     "direct_fallback": "the verdict came from the direct question after the reporter's checks failed",
     "copies_example": "its reason is the prompt's own example, word for word",
+    "holds_at_start": "its check also says the goal holds in the scene the robot started from",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 
@@ -65,8 +67,8 @@ def assess(report: Report | None, objects: Sequence[ObjectSpec]) -> Assessment:
         return Assessment("low", "no_verdict")
     if report.source == "direct":
         return Assessment("low", "direct_fallback")
-    if report.copied:
-        return Assessment("low", "copies_example")
+    if report.doubt is not None:
+        return Assessment("low", report.doubt)
     named = [resolve_name(n, objects) for n in report.wrong]
     real = [o for o in named if o is not None]
     movable = tuple(dict.fromkeys(o.obj_id for o in real if not o.fixed))

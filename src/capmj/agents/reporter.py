@@ -20,6 +20,7 @@ from typing import Any
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.reporter_env import PREBOUND, reporter_env
+from capmj.agents.reporter_goalcheck import GoalCheckReporter
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.reporter_vlm import VLMReporter
 from capmj.agents.verdict import Report, direct_verdict, parse_verdict, run_checking_code
@@ -29,9 +30,10 @@ from capmj.errors import ConfigError
 __all__ = ["REPORTERS", "REPORTER_PROMPTS", "Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
 
 REPORTERS = ("none", "text", "vlm")
-REPORTER_PROMPTS = ("thesis", "checked", "records")
-"""``--reporter-prompt``: :class:`TextReporter`, :class:`~capmj.agents.reporter_checked.CheckedReporter`
-or :class:`~capmj.agents.reporter_records.RecordsReporter`."""
+REPORTER_PROMPTS = ("thesis", "checked", "records", "goalcheck")
+"""``--reporter-prompt``: :class:`TextReporter`, :class:`~capmj.agents.reporter_checked.CheckedReporter`,
+:class:`~capmj.agents.reporter_records.RecordsReporter` or
+:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`."""
 
 
 def _repair_request(problem: str, question: str) -> str:
@@ -92,6 +94,8 @@ def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis
         return CheckedReporter(prompt_directory)
     if mode == "text" and prompt == "records":
         return RecordsReporter(prompt_directory)
+    if mode == "text" and prompt == "goalcheck":
+        return GoalCheckReporter(prompt_directory)
     if mode == "text":
         return TextReporter()
     if mode == "vlm":

@@ -17,7 +17,7 @@ Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — n
 since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
 real objects?) is :func:`capmj.agents.confidence.assess`, applied to either prompt's verdict.
 
-A verdict whose reason is the prompt file's own example word for word is marked ``copied`` (low
+A verdict whose reason is the prompt file's own example word for word is marked ``doubt="copies_example"`` (low
 confidence, ``copies_example``).  Why: 22 of the shared 1.5B model's 39 answers on the judge's
 seed-10001 subset were the example ("the red block rests on the table, not on the blue block",
 naming obj_id 3) whatever the state, right on 12, and 15 of them counted as high-confidence
@@ -81,7 +81,7 @@ class CheckedReporter:
             return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
         reason = " ".join(report.reason.split())
         if len(reason) >= MIN_COPIED_CHARS and reason in " ".join(template.split()):
-            return dataclasses.replace(report, copied=True)
+            return dataclasses.replace(report, doubt="copies_example")
         return report
 
     def close(self) -> None:

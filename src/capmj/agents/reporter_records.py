@@ -15,7 +15,7 @@ So ``records`` meets the model where it is: the facts of :mod:`capmj.agents.scen
 Python list of dicts (:mod:`capmj.agents.scene_records`), the prompt
 (``prompts/reporter_records.py``) documents the keys and shows three short checks, and the model
 writes code that sets ``judge``, ``reason`` and ``wrong``.  The code runs in the sandbox like every
-other model-written code (:func:`capmj.agents.verdict.run_checking_code`), with one repair request
+other model-written code (:func:`capmj.agents.verdict.check`), with one repair request
 on failure.  Still no verdict: the ``checked`` question (:class:`~capmj.agents.reporter_checked.CheckedReporter`,
 the same measured facts, a literal answer parsed and never run) is asked as the ``direct`` source.
 Why: on the judge's 40-state subset (seeds 10001 and 10003) 9-14 states ended unknown, every one
@@ -43,11 +43,11 @@ import dataclasses
 import re
 from typing import Any
 
-from capmj.agents.lmp import LMPSession
+from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.scene_facts import state_from_api
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of
-from capmj.agents.verdict import Report, run_checking_code
+from capmj.agents.verdict import CheckRun, Report, check
 from capmj.llm.provider import derived_seed
 
 __all__ = ["PROMPT", "RecordsReporter"]
@@ -97,11 +97,11 @@ class RecordsReporter:
                                                             "seed": derived_seed(f"capmj-records-repair/{question}")})):
             call = session.next_call(PROMPT, goal)
             text = session.ask(call, messages, **sampling)
-            env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it
-            verdict, reason, wrong, problem = run_checking_code(
-                session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>")
+            run, doubt = self._check(session, call, text, ctx, last=source == "repair")
+            problem = run.problem
             if problem is None:
-                return Report(self.mode, verdict, reason, errors[-1] if errors else None, source, wrong, errors)
+                return Report(self.mode, run.verdict, run.reason, errors[-1] if errors else None, source, run.wrong,
+                              errors, doubt)
             errors += (f"{source}: {problem}",)
             copied = COPIED_RECORDS_HINT if _COPIES_RECORDS.match(text) else ""
             messages = messages + [{"role": "assistant", "content": text}, {"role": "user", "content": (
@@ -110,6 +110,14 @@ class RecordsReporter:
                 f"# Set judge = True or False, reason = a short sentence, wrong = [full names of the movable "
                 f"objects that break the goal].\n# goal: {' '.join(goal.split())}\n")}]
         return self._direct(session, ctx, goal, errors)
+
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> tuple[CheckRun, str | None]:
+        """The answer's check run on the scene's records, and a doubt about its verdict (none here).
+
+        ``last``: no repair request follows, so a subclass keeps a doubtful verdict instead of
+        returning a problem."""
+        env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it
+        return check(session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>"), None
 
     def _direct(self, session: LMPSession, ctx: Any, goal: str, errors: tuple[str, ...]) -> Report:
         """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""

@@ -27,10 +27,12 @@ from capmj.agents.scene_facts import ObjectFacts, area_of, scene_facts
 from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 
-__all__ = ["RECORD_KEYS", "records", "records_text", "start_areas_of"]
+__all__ = ["INVENTORY_KEYS", "RECORD_KEYS", "records", "records_text", "start_areas_of"]
 
 RECORD_KEYS = ("name", "kind", "color", "size", "area", "start_area", "rests_on", "below", "level", "inside", "inside_color",
                "holds", "tilted", "centre")
+INVENTORY_KEYS = ("name", "kind", "color", "size")
+"""The keys that acting cannot change: what the ``goalcheck`` reporter shows before the check runs."""
 _REST_SUFFIX = " (inside)"
 _NOTHING = "nothing (in the air or leaning)"
 
@@ -84,11 +86,11 @@ def records(state: SceneState, start_areas: Mapping[int, str] | None = None) -> 
     return out
 
 
-def records_text(rows: Sequence[Mapping[str, Any]]) -> str:
-    """``objects = [...]`` with one record per line, as the prompt shows it (keys in RECORD_KEYS order)."""
+def records_text(rows: Sequence[Mapping[str, Any]], keys: Sequence[str] = RECORD_KEYS) -> str:
+    """``objects = [...]`` with one record per line, as the prompt shows it (``keys``, in their order)."""
     lines = ["objects = ["]
     for r in rows:
-        lines.append("    {" + ", ".join(f"{k!r}: {r[k]!r}" for k in RECORD_KEYS) + "},")
+        lines.append("    {" + ", ".join(f"{k!r}: {r[k]!r}" for k in keys) + "},")
     lines.append("]")
     return "\n".join(lines)
 

@@ -31,7 +31,7 @@ import numpy as np
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import ConfigError, PlanError, describe
 
-__all__ = ["SOURCES", "Report", "ask_verdict", "direct_verdict", "parse_verdict", "parse_wrong", "run_checking_code", "scene_listing"]
+__all__ = ["SOURCES", "CheckRun", "Report", "ask_verdict", "check", "direct_verdict", "parse_verdict", "parse_wrong", "rerun_check", "run_checking_code", "scene_listing"]
 
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
@@ -51,8 +51,10 @@ class Report:
     """Objects whose state the reporter says is wrong (when it named them)."""
     errors: tuple[str, ...] = ()
     """Every problem met on the way, in order (``"code: ..."``, ``"repair: ..."``, ...)."""
-    copied: bool = False
-    """The answer's reason is the prompt's own example, word for word: it says nothing of this scene."""
+    doubt: str | None = None
+    """Why the reporter itself doubts this verdict: a key of :data:`capmj.agents.confidence.LOW_CONFIDENCE`
+    (``copies_example``: the reason is the prompt's own example word for word; ``holds_at_start``: the
+    check also says "achieved" of the scene the robot started from)."""
 
     def text(self) -> str:
         word = {True: "ACHIEVED", False: "NOT ACHIEVED", None: "UNKNOWN"}[self.verdict]
@@ -212,27 +214,56 @@ def _failing_line(exc: PlanError, code: str) -> str:
     return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
 
 
-def run_checking_code(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str
-                      ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
-    """``(verdict, reason, wrong, problem)`` of the checking code in ``text``, run in the sandbox
-    with ``env`` (after :meth:`LMPSession.prepare`); ``problem`` is None when it set a bool ``judge``."""
+@dataclass(frozen=True)
+class CheckRun:
+    """One run of model-written checking code: its verdict, or the problem that stopped it."""
+
+    verdict: bool | None
+    reason: str = ""
+    wrong: tuple[str, ...] = ()
+    problem: str | None = None
+    """None when the code set a bool ``judge``."""
+    code: str = ""
+    """The code as run (after :meth:`LMPSession.prepare`): what :func:`rerun_check` runs again."""
+
+
+def check(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str) -> CheckRun:
+    """The :class:`CheckRun` of the checking code in ``text``, run in the sandbox with ``env``."""
     code = ""
     try:
         code = extract_code(text)
         code = session.prepare(code, env, parent=call)
         session.record(call, "code", code)
-        ns = run_code(code, env, budget=session.lmp_budget, filename=filename)
     except PlanError as exc:
         problem = f"{describe(exc)}{_failing_line(exc, code)}"
         session.record(call, "error", problem)
-        return None, "", (), problem
+        return CheckRun(None, problem=problem, code=code)
+    return rerun_check(session, call, code, env, filename, "result")
+
+
+def rerun_check(session: LMPSession, call: LMPCall, code: str, env: dict[str, Any], filename: str,
+                label: str) -> CheckRun:
+    """Run prepared checking ``code`` with ``env``; the outcome is recorded under ``label``."""
+    try:
+        ns = run_code(code, env, budget=session.lmp_budget, filename=filename)
+    except PlanError as exc:
+        problem = f"{describe(exc)}{_failing_line(exc, code)}"
+        session.record(call, "error" if label == "result" else f"{label} error", problem)
+        return CheckRun(None, problem=problem, code=code)
     judge, reason = ns.get("judge"), ns.get("reason")
     reason = reason if isinstance(reason, str) else ""
     if not isinstance(judge, (bool, np.bool_)):
         problem = ("the code did not set 'judge'" if "judge" not in ns
                    else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
-        session.record(call, "error", problem)
-        return None, reason, (), problem
+        session.record(call, "error" if label == "result" else f"{label} error", problem)
+        return CheckRun(None, reason, problem=problem, code=code)
     wrong = names_of(ns.get("wrong"))
-    session.record(call, "result", f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-    return bool(judge), reason, wrong, None
+    session.record(call, label, f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
+    return CheckRun(bool(judge), reason, wrong, None, code)
+
+
+def run_checking_code(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str
+                      ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
+    """``(verdict, reason, wrong, problem)`` of :func:`check`; ``problem`` is None when it set a bool ``judge``."""
+    run = check(session, call, text, env, filename)
+    return run.verdict, run.reason, run.wrong, run.problem

@@ -70,8 +70,9 @@ AGENT_FLAGS: tuple[Flag, ...] = (
          "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
          "on a low-confidence one; docs/llm.md)", choices=("thesis", "careful")),
     Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code), "
-         "checked (capmj binds the scene facts as text) or records (as records for checking code; docs/judge.md)",
-         choices=("thesis", "checked", "records")),
+         "checked (capmj binds the scene facts as text), records (as records for checking code) or goalcheck (a "
+         "check written from the goal and the objects, run on the measured records; docs/judge.md)",
+         choices=("thesis", "checked", "records", "goalcheck")),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "

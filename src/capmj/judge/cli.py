@@ -59,8 +59,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="text / vlm: the closed loop's reporters; predicate: the task predicate (a reference)")
     p.add_argument("--reporter-prompt", dest="reporter_prompt", default="thesis", choices=REPORTER_PROMPTS,
                    help="the text reporter's prompt: thesis (checking code the model writes), checked (capmj "
-                        "binds the scene facts, the model compares them with the goal) or records (capmj binds "
-                        "the facts as records, the model's checking code compares them); default thesis")
+                        "binds the scene facts, the model compares them with the goal), records (capmj binds "
+                        "the facts as records, the model's checking code compares them) or goalcheck (the check "
+                        "is written from the goal and the objects alone, then run on the measured records of the "
+                        "state and of the start scene); default thesis")
     p.add_argument("--per-task", dest="per_task", type=int, default=None, metavar="N",
                    help="judge a deterministic stratified subset: N cases per task, drawn in turn from oracle, "
                         "negatives, near_inside, near_outside (capmj.judge.subset); default: every case")

@@ -1,0 +1,77 @@
+"""The ``goalcheck`` text-reporter prompt: the model writes the goal's check before seeing the
+result, capmj runs it on the measured final scene and on the scene the robot started from.
+
+Why, from the shared 1.5B model's ``records`` answers on the judge's subsets (seeds 10001 and
+10003, 79 states): for 28 of the 39 episodes with both an achieved and a failed state judged, the
+verdict was the same for both (23 of them "not achieved" for both), and about half of the wrong
+checks were ``judge = False`` with no test at all, or tests that compare a key with a word
+(``b["inside"] != "zone"``).  The model was shown the measured records and still wrote a check
+that did not look at them.
+
+So ``goalcheck`` asks for what the check is really made of, the goal and the objects, and keeps the
+result out of the question:
+
+* the question lists only the keys acting cannot change (``name``, ``kind``, ``color``, ``size``:
+  :data:`capmj.agents.scene_records.INVENTORY_KEYS`) under the ``records`` prompt's documentation of
+  every key (``prompts/reporter_records.py``, the same file: one description of the records);
+* the check runs on the full records of the settled final scene, which gives the verdict;
+* it runs again on the records of the start scene, where no task's goal holds (checked for the 20
+  tasks × 5 test seeds).  A check that says "achieved" there tests nothing of the state: the
+  answer gets the repair request with that fact, and if the repaired check says so again its
+  verdict is kept but doubted (``holds_at_start``, low-confidence: the ``careful`` loop does not act
+  on it).  A check that *fails* on the start scene is not held against it (``[...][0]`` of the blocks
+  in a zone that is empty at the start).
+
+A consequence that makes the judge affordable: every state of one episode gets the same question,
+so with ``--llm-cache`` the model is asked once per (task, seed), not once per state.
+
+The start scene's records are read from the simulator's initial state, as ``start_area`` is
+(:meth:`~capmj.agents.reporter_records.RecordsReporter.start`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.reporter_records import PROMPT, RecordsReporter
+from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
+from capmj.agents.verdict import CheckRun, rerun_check
+from capmj.sim.state import SceneState
+
+__all__ = ["HOLDS_AT_START", "GoalCheckReporter"]
+
+HOLDS_AT_START = ("it says the goal already holds in the scene the robot started from, and no goal holds there: "
+                  "the check must compare the measured keys (inside, level, rests_on, area, tilted ...) with the goal")
+"""The problem the repair request states when a check says "achieved" of the start scene."""
+
+
+class GoalCheckReporter(RecordsReporter):
+    """``--reporter-prompt goalcheck``: the check from goal + inventory, run on the final and start scene."""
+
+    prompt = "goalcheck"
+
+    def __init__(self, prompt_directory: Any = None) -> None:
+        super().__init__(prompt_directory)
+        self._start_state: SceneState | None = None
+
+    def start(self, ctx: Any) -> None:
+        """Remember the start scene (for the second run of the check) and its quarters."""
+        super().start(ctx)
+        self._start_state = ctx.world.state()
+
+    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
+        """The scene's inventory (the keys acting cannot change) and the goal."""
+        inventory = records_text(self._records(session, ctx), INVENTORY_KEYS)
+        return (f"# The objects of this scene. When the check runs, every record also has the measured keys above.\n"
+                f"{inventory}\n# goal: {' '.join(goal.split())}")
+
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> tuple[CheckRun, str | None]:
+        run, _ = super()._check(session, call, text, ctx, last)
+        if run.problem is not None or self._start_state is None:
+            return run, None
+        at_start = rerun_check(session, call, run.code, {"objects": records(self._start_state, self._start)},
+                               f"<{PROMPT} {session.attempt}.{call.n} start>", "start scene")
+        if at_start.verdict is not True:
+            return run, None
+        return (run, "holds_at_start") if last else (CheckRun(None, problem=HOLDS_AT_START, code=run.code), None)
