@@ -3,8 +3,8 @@ result, capmj runs it on the measured final scene and on the scene the robot sta
 
 Why, from the shared 1.5B model's ``records`` answers on the judge's subsets (seeds 10001 and
 10003, 79 states): for 28 of the 39 episodes with both an achieved and a failed state judged, the
-verdict was the same for both (23 of them "not achieved" for both), and about half of the wrong
-checks were ``judge = False`` with no test at all, or tests that compare a key with a word
+verdict was the same for both (23 of them "not achieved" for both), and 14 of the 25 wrong checks
+set ``judge`` to a constant with no test at all; others compared a key with a word
 (``b["inside"] != "zone"``).  The model was shown the measured records and still wrote a check
 that did not look at them.
 
