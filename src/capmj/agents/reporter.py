@@ -23,7 +23,7 @@ from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.reporter_goalcheck import GoalCheckReporter
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.reporter_vlm import VLMReporter
-from capmj.agents.verdict import Report, direct_verdict, parse_verdict, run_checking_code
+from capmj.agents.verdict import CheckRun, Report, check, direct_verdict, parse_verdict
 from capmj.errors import ConfigError
 
 # Re-exported: Report and parse_verdict (tests import them from here), VLMReporter (make_reporter's).
@@ -64,21 +64,22 @@ class TextReporter:
         for source in ("code", "repair"):
             call = session.next_call("parse_completion", goal)
             text = session.ask(call, messages)
-            verdict, reason, wrong, problem = self._run(session, call, text, ctx, goal, question)
+            run = self._run(session, call, text, ctx, goal, question)
+            problem = run.problem
             if problem is None:
-                return Report(self.mode, verdict, reason, errors[-1] if errors else None, source, wrong, errors)
+                return Report(self.mode, run.verdict, run.reason, errors[-1] if errors else None, source, run.wrong,
+                              errors)
             errors += (f"{source}: {problem}",)
             messages = messages + [{"role": "assistant", "content": text},
                                    {"role": "user", "content": _repair_request(problem, question)}]
         return direct_verdict(session, goal, self.mode, errors)
 
     @staticmethod
-    def _run(session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, question: str
-             ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
-        """(verdict, reason, wrong, problem) of one answer's checking code."""
+    def _run(session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, question: str) -> CheckRun:
+        """The run of one answer's checking code."""
         env = session.helper_env(question)
         env.update(reporter_env(session.api, ctx.world.objects, goal))  # fresh: code may mutate it
-        return run_checking_code(session, call, text, env, f"<parse_completion {session.attempt}.{call.n}>")
+        return check(session, call, text, env, f"<parse_completion {session.attempt}.{call.n}>")
 
     def close(self) -> None:
         return None

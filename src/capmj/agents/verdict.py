@@ -31,7 +31,8 @@ import numpy as np
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import ConfigError, PlanError, describe
 
-__all__ = ["SOURCES", "CheckRun", "Report", "ask_verdict", "check", "direct_verdict", "parse_verdict", "parse_wrong", "rerun_check", "run_checking_code", "scene_listing"]
+__all__ = ["SOURCES", "CheckRun", "Report", "ask_verdict", "check", "direct_verdict", "parse_verdict", "parse_wrong",
+           "rerun_check", "scene_listing"]
 
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
@@ -243,27 +244,22 @@ def check(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], fi
 
 def rerun_check(session: LMPSession, call: LMPCall, code: str, env: dict[str, Any], filename: str,
                 label: str) -> CheckRun:
-    """Run prepared checking ``code`` with ``env``; the outcome is recorded under ``label``."""
+    """Run prepared checking ``code`` with ``env``; the outcome is recorded under ``label``
+    (``result``; a problem under ``error``, or ``<label> error`` for another label)."""
+    failed = "error" if label == "result" else f"{label} error"
     try:
         ns = run_code(code, env, budget=session.lmp_budget, filename=filename)
     except PlanError as exc:
         problem = f"{describe(exc)}{_failing_line(exc, code)}"
-        session.record(call, "error" if label == "result" else f"{label} error", problem)
+        session.record(call, failed, problem)
         return CheckRun(None, problem=problem, code=code)
     judge, reason = ns.get("judge"), ns.get("reason")
     reason = reason if isinstance(reason, str) else ""
     if not isinstance(judge, (bool, np.bool_)):
         problem = ("the code did not set 'judge'" if "judge" not in ns
                    else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
-        session.record(call, "error" if label == "result" else f"{label} error", problem)
+        session.record(call, failed, problem)
         return CheckRun(None, reason, problem=problem, code=code)
     wrong = names_of(ns.get("wrong"))
     session.record(call, label, f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
     return CheckRun(bool(judge), reason, wrong, None, code)
-
-
-def run_checking_code(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str
-                      ) -> tuple[bool | None, str, tuple[str, ...], str | None]:
-    """``(verdict, reason, wrong, problem)`` of :func:`check`; ``problem`` is None when it set a bool ``judge``."""
-    run = check(session, call, text, env, filename)
-    return run.verdict, run.reason, run.wrong, run.problem
