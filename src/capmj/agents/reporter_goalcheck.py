@@ -26,18 +26,18 @@ A consequence that makes the judge affordable: every state of one episode gets t
 so with ``--llm-cache`` the model is asked once per (task, seed), not once per state.
 
 The start scene's records are read from the simulator's initial state, as ``start_area`` is
-(:meth:`~capmj.agents.reporter_records.RecordsReporter.start`).
+(:meth:`~capmj.agents.reporter_records.RecordsReporter.start` keeps both).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_records import PROMPT, RecordsReporter
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun, rerun_check
-from capmj.sim.state import SceneState
 
 __all__ = ["HOLDS_AT_START", "GoalCheckReporter"]
 
@@ -51,27 +51,19 @@ class GoalCheckReporter(RecordsReporter):
 
     prompt = "goalcheck"
 
-    def __init__(self, prompt_directory: Any = None) -> None:
-        super().__init__(prompt_directory)
-        self._start_state: SceneState | None = None
-
-    def start(self, ctx: Any) -> None:
-        """Remember the start scene (for the second run of the check) and its quarters."""
-        super().start(ctx)
-        self._start_state = ctx.world.state()
-
     def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
         """The scene's inventory (the keys acting cannot change) and the goal."""
         inventory = records_text(self._records(session, ctx), INVENTORY_KEYS)
         return (f"# The objects of this scene. When the check runs, every record also has the measured keys above.\n"
                 f"{inventory}\n# goal: {' '.join(goal.split())}")
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> tuple[CheckRun, str | None]:
-        run, _ = super()._check(session, call, text, ctx, last)
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
+        run = super()._check(session, call, text, ctx, last)
         if run.problem is not None or self._start_state is None:
-            return run, None
+            return run
         at_start = rerun_check(session, call, run.code, {"objects": records(self._start_state, self._start)},
                                f"<{PROMPT} {session.attempt}.{call.n} start>", "start scene")
         if at_start.verdict is not True:
-            return run, None
-        return (run, "holds_at_start") if last else (CheckRun(None, problem=HOLDS_AT_START, code=run.code), None)
+            return run
+        return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(
+            None, problem=HOLDS_AT_START, code=run.code)

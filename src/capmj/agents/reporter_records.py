@@ -49,6 +49,7 @@ from capmj.agents.scene_facts import state_from_api
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of
 from capmj.agents.verdict import CheckRun, Report, check
 from capmj.llm.provider import derived_seed
+from capmj.sim.state import SceneState
 
 __all__ = ["PROMPT", "RecordsReporter"]
 
@@ -73,14 +74,16 @@ class RecordsReporter:
 
     def __init__(self, prompt_directory: Any = None) -> None:
         self._start: dict[int, str] = {}
+        self._start_state: SceneState | None = None
         self._fallback = CheckedReporter(prompt_directory)
 
     def start(self, ctx: Any) -> None:
-        """Remember the quarter each object starts in (the ``start_area`` of its record).
+        """Remember the start scene and the quarter each object starts in (the ``start_area`` of its record).
 
         Read from the simulator's initial state, as the episode's own start is known to any
         observer of it; in ``--perception rgbd`` mode this one fact is not perceived."""
-        self._start = start_areas_of({o.obj_id: ctx.world.pose(o.obj_id).pos for o in ctx.world.objects})
+        self._start_state = ctx.world.state()
+        self._start = start_areas_of({o.obj_id: pose.pos for o, pose in self._start_state})
 
     def _records(self, session: LMPSession, ctx: Any) -> list[dict[str, Any]]:
         return records(state_from_api(session.api, ctx.world.objects), self._start)
@@ -97,11 +100,11 @@ class RecordsReporter:
                                                             "seed": derived_seed(f"capmj-records-repair/{question}")})):
             call = session.next_call(PROMPT, goal)
             text = session.ask(call, messages, **sampling)
-            run, doubt = self._check(session, call, text, ctx, last=source == "repair")
+            run = self._check(session, call, text, ctx, last=source == "repair")
             problem = run.problem
             if problem is None:
                 return Report(self.mode, run.verdict, run.reason, errors[-1] if errors else None, source, run.wrong,
-                              errors, doubt)
+                              errors, run.doubt)
             errors += (f"{source}: {problem}",)
             copied = COPIED_RECORDS_HINT if _COPIES_RECORDS.match(text) else ""
             messages = messages + [{"role": "assistant", "content": text}, {"role": "user", "content": (
@@ -111,13 +114,13 @@ class RecordsReporter:
                 f"objects that break the goal].\n# goal: {' '.join(goal.split())}\n")}]
         return self._direct(session, ctx, goal, errors)
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> tuple[CheckRun, str | None]:
-        """The answer's check run on the scene's records, and a doubt about its verdict (none here).
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
+        """The answer's check run on the scene's records.
 
-        ``last``: no repair request follows, so a subclass keeps a doubtful verdict instead of
-        returning a problem."""
+        ``last``: no repair request follows, so a subclass keeps a doubtful verdict (``CheckRun.doubt``)
+        instead of returning a problem."""
         env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it
-        return check(session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>"), None
+        return check(session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>")
 
     def _direct(self, session: LMPSession, ctx: Any, goal: str, errors: tuple[str, ...]) -> Report:
         """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""

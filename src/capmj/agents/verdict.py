@@ -226,6 +226,8 @@ class CheckRun:
     """None when the code set a bool ``judge``."""
     code: str = ""
     """The code as run (after :meth:`LMPSession.prepare`): what :func:`rerun_check` runs again."""
+    doubt: str | None = None
+    """Why the reporter doubts this run's verdict (becomes :attr:`Report.doubt`)."""
 
 
 def check(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str) -> CheckRun:
