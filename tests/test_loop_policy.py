@@ -194,8 +194,8 @@ def test_careful_rules_fire_only_where_they_should() -> None:
 def test_bad_policies_are_refused_and_the_options_reach_the_agent() -> None:
     from capmj.agents.factory import make_agent
     from capmj.agents.llm_options import LLMAgentOptions
-    from capmj.agents.loop_policy import LOOP_POLICIES
-    from capmj.agents.reporter import REPORTER_PROMPTS
+    from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
+    from capmj.agents.reporter import make_reporter
     from capmj.bench.cli import build_parser
 
     with pytest.raises(ConfigError, match="thesis, careful"):
@@ -207,5 +207,13 @@ def test_bad_policies_are_refused_and_the_options_reach_the_agent() -> None:
                    reporter_prompt=args.reporter_prompt)
     assert (a.options.loop_policy, a.options.reporter_prompt) == ("careful", "checked")
     assert (LLMAgentOptions().loop_policy, LLMAgentOptions().reporter_prompt) == ("thesis", "thesis")
+    # every name the parser offers (capmj.agents.choices) is one the agent builds, each a reporter of its own
     actions = {a.dest: a.choices for a in build_parser()._actions}
     assert tuple(actions["loop_policy"]) == LOOP_POLICIES and tuple(actions["reporter_prompt"]) == REPORTER_PROMPTS
+    for policy in LOOP_POLICIES:
+        assert LLMAgentOptions(loop_policy=policy).loop_policy == policy
+    for mode in REPORTERS:
+        assert (make_reporter(mode) is None) == (mode == "none")
+    assert len({type(make_reporter("text", None, p)) for p in REPORTER_PROMPTS}) == len(REPORTER_PROMPTS)
+    for choice in ON_UNKNOWN:
+        assert LLMAgentOptions(on_unknown=choice).on_unknown == choice

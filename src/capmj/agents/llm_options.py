@@ -19,17 +19,15 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from capmj.agents.choices import ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
 from capmj.agents.llm_meter import Price, check_limit, parse_price
 from capmj.agents.loop_policy import check_policy
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET
-from capmj.agents.reporter import REPORTER_PROMPTS, REPORTERS
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError
 from capmj.llm import LLMConfig
 from capmj.llm.cache import env_cache_dir
 
-ON_UNKNOWN = ("replan", "stop")
-"""What an unknown reporter verdict does: re-plan like a False verdict (default), or stop."""
 
 DEFAULT_REPLAN_TEMPERATURE = 0.7
 """Sampling temperature of the first planner request of attempts 2, 3, ... (at 0 a small model
@@ -70,14 +68,14 @@ class LLMAgentOptions:
     the agent checks that against its ``LLMConfig``."""
 
     reporter: str = "none"
-    """The completion reporter: ``capmj.agents.reporter.REPORTERS``."""
+    """The completion reporter: :data:`capmj.agents.choices.REPORTERS`."""
     attempts: int = 1
     on_unknown: str = "replan"
-    """:data:`ON_UNKNOWN`."""
+    """:data:`capmj.agents.choices.ON_UNKNOWN`."""
     loop_policy: str = "thesis"
-    """``capmj.agents.loop_policy.LOOP_POLICIES``."""
+    """:data:`capmj.agents.choices.LOOP_POLICIES`."""
     reporter_prompt: str = "thesis"
-    """The text reporter's prompt: ``capmj.agents.reporter.REPORTER_PROMPTS``."""
+    """The text reporter's prompt: :data:`capmj.agents.choices.REPORTER_PROMPTS`."""
     replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE
     replan_retries: int = DEFAULT_REPLAN_RETRIES
     perception: str = "state"
@@ -162,5 +160,5 @@ def llm_agent_configs(options: Mapping[str, Any]) -> tuple[LLMConfig, LLMAgentOp
 
 
 __all__ = ["CONFIG_FIELDS", "DEFAULT_LMP_BUDGET", "DEFAULT_MODEL", "DEFAULT_REPLAN_RETRIES",
-           "DEFAULT_REPLAN_TEMPERATURE", "LLMAgentOptions", "LLM_AGENT_OPTIONS", "MAX_REPLAN_RETRIES", "ON_UNKNOWN",
+           "DEFAULT_REPLAN_TEMPERATURE", "LLMAgentOptions", "LLM_AGENT_OPTIONS", "MAX_REPLAN_RETRIES",
            "OPTION_FIELDS", "llm_agent_configs"]

@@ -22,7 +22,7 @@ c. **stop on low confidence.** A verdict :func:`capmj.agents.confidence.assess` 
    raised, a low-confidence verdict does not stop: the error is evidence, so the thesis rule
    (``error``: reset and re-plan) applies.
 
-Without a reporter both policies are the same.  The rules are named in
+Without a reporter both policies are the same.  Their names: :data:`capmj.agents.choices.LOOP_POLICIES`.  The rules are named in
 :data:`capmj.records.LOOP_RULES`; :func:`decide` is the one place that chooses among them.
 """
 
@@ -31,14 +31,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from capmj.agents.choices import LOOP_POLICIES
 from capmj.agents.confidence import Assessment
 from capmj.errors import ConfigError
 from capmj.records import LOOP_RULES
 
-__all__ = ["LOOP_POLICIES", "Decision", "Outcome", "check_policy", "decide", "judges_errors", "wrong_share"]
+__all__ = ["Decision", "Outcome", "check_policy", "decide", "judges_errors", "wrong_share"]
 
-LOOP_POLICIES = ("thesis", "careful")
-"""``--loop-policy`` values (see the module docstring)."""
 
 
 @dataclass(frozen=True)

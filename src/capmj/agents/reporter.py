@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from capmj.agents.choices import REPORTER_PROMPTS, REPORTERS
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.reporter_env import PREBOUND, reporter_env
@@ -27,13 +28,7 @@ from capmj.agents.verdict import CheckRun, Report, check, direct_verdict, parse_
 from capmj.errors import ConfigError
 
 # Re-exported: Report and parse_verdict (tests import them from here), VLMReporter (make_reporter's).
-__all__ = ["REPORTERS", "REPORTER_PROMPTS", "Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
-
-REPORTERS = ("none", "text", "vlm")
-REPORTER_PROMPTS = ("thesis", "checked", "records", "goalcheck")
-"""``--reporter-prompt``: :class:`TextReporter`, :class:`~capmj.agents.reporter_checked.CheckedReporter`,
-:class:`~capmj.agents.reporter_records.RecordsReporter` or
-:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`."""
+__all__ = ["Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
 
 
 def _repair_request(problem: str, question: str) -> str:

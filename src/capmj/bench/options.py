@@ -16,6 +16,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
 from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
 
@@ -62,17 +63,17 @@ PERCEPTION = Flag(("--perception",), "perception", "what the planner API of the 
                   "entry points; see docs/perception.md)", perception_mode, "MODE")
 
 AGENT_FLAGS: tuple[Flag, ...] = (
-    Flag(("--reporter",), "reporter", "completion reporter", choices=("none", "text", "vlm")),
+    Flag(("--reporter",), "reporter", "completion reporter", choices=REPORTERS),
     Flag(("--attempts",), "attempts", "plan attempts (closed loop)", int, "N"),
     Flag(("--on-unknown",), "on_unknown", "what an unknown reporter verdict does (default: replan)",
-         choices=("replan", "stop")),
+         choices=ON_UNKNOWN),
     Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: thesis (default: reset and re-plan "
          "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
-         "on a low-confidence one; docs/llm.md)", choices=("thesis", "careful")),
+         "on a low-confidence one; docs/llm.md)", choices=LOOP_POLICIES),
     Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code), "
          "checked (capmj binds the scene facts as text), records (as records for checking code) or goalcheck (a "
          "check written from the goal and the objects, run on the measured records; docs/judge.md)",
-         choices=("thesis", "checked", "records", "goalcheck")),
+         choices=REPORTER_PROMPTS),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "

@@ -32,7 +32,7 @@ EXIT_BUDGET = 3
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from capmj.agents.reporter import REPORTER_PROMPTS
+    from capmj.agents.choices import REPORTER_PROMPTS
     from capmj.judge.cases import KINDS
     from capmj.judge.evaluate import JUDGE_REPORTERS
 

@@ -24,7 +24,8 @@ from capmj.agents.llm_options import DEFAULT_LMP_BUDGET
 from capmj.agents.llm_meter import LLMMeter, parse_price
 from capmj.agents.lmp import LMPSession, find_llm_error
 from capmj.agents.confidence import assess
-from capmj.agents.reporter import REPORTER_PROMPTS, make_reporter
+from capmj.agents.choices import REPORTER_PROMPTS
+from capmj.agents.reporter import make_reporter
 from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.llm import LLMClient, LLMConfig
@@ -56,7 +57,7 @@ class JudgeConfig:
     price: str | None = None
     prompts_dir: str | None = None
     reporter_prompt: str = "thesis"
-    """The text reporter's prompt (:data:`capmj.agents.reporter.REPORTER_PROMPTS`), as the bench's
+    """The text reporter's prompt (:data:`capmj.agents.choices.REPORTER_PROMPTS`), as the bench's
     ``--reporter-prompt``."""
 
     def __post_init__(self) -> None:
