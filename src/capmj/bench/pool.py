@@ -12,6 +12,7 @@ starts its workers through its context), so no private attribute of the executor
 
 from __future__ import annotations
 
+import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import resource_tracker
 from multiprocessing.context import SpawnContext, SpawnProcess
@@ -32,6 +33,25 @@ class TrackingSpawnContext(SpawnContext):
         return process
 
 
+def _exit_code(process: SpawnProcess, timeout_s: float) -> int | None:
+    """``process``'s exit code, waiting up to ``timeout_s`` for it (None: still running or never started).
+
+    Why the retry: a broken executor's manager thread reaps its dead workers itself.  When it wins
+    the ``waitpid`` race, ``join`` here returns on the closed sentinel but reads no code (the reaping
+    thread has not stored it yet), and the grid would lose the cause of the death.
+    """
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            process.join(timeout=max(0.0, deadline - time.monotonic()))
+            code = process.exitcode
+        except Exception:  # noqa: BLE001 - a process that never started
+            return None
+        if code is not None or time.monotonic() >= deadline:
+            return code
+        time.sleep(0.01)
+
+
 class SpawnPool(ProcessPoolExecutor):
     """A ``ProcessPoolExecutor`` on a :class:`TrackingSpawnContext`; :meth:`kill` ends it at once."""
 
@@ -49,11 +69,7 @@ class SpawnPool(ProcessPoolExecutor):
         """The non-zero exit codes of the pool's processes; a dying one gets ``timeout_s`` to be reaped."""
         codes = []
         for p in self.processes():
-            try:
-                p.join(timeout=timeout_s)
-                code = p.exitcode
-            except Exception:  # noqa: BLE001 - a process that never started
-                code = None
+            code = _exit_code(p, timeout_s)
             if code not in (None, 0):
                 codes.append(code)
         return codes
