@@ -74,6 +74,7 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "direct_fallback": Report("text", False, "no", source="direct", wrong=(block.name,)),
         "copies_example": Report("text", False, "no", wrong=(block.name,), doubt="copies_example"),
         "holds_at_start": Report("text", True, "yes", doubt="holds_at_start"),
+        "blind_check": Report("text", False, "no", wrong=(block.name,), doubt="blind_check"),
     }
     for why, report in cases.items():
         a = assess(report, objects)

@@ -28,7 +28,12 @@ wrong = [b["name"] for b in blocks if b["color"] != b["inside_color"]]
 judge = len(wrong) == 0
 reason = "blocks outside a bowl of their colour: " + ", ".join(wrong)
 """
-ALWAYS_ACHIEVED = "judge = True\nreason = 'every block is in place'\nwrong = []"
+NOTHING_TILTED = "wrong = [o['name'] for o in objects if o['tilted']]\njudge = not wrong\nreason = 'tilted: ' + str(wrong)"
+"""Reads a measured key, yet holds in the start scene too (nothing is tilted there)."""
+NEVER_ACHIEVED = "judge = False\nreason = 'the blocks are not in their bowls'\nwrong = []"
+IN_A_BOWL_WORD = ("wrong = [o['name'] for o in objects if o['kind'] == 'block' and o['inside'] != 'bowl']\n"
+                  "judge = not wrong\nreason = 'not in a bowl: ' + ', '.join(wrong)")
+"""Compares ``inside`` with a word no record has (the bowls' names are "... bowl with obj_id ...")."""
 
 
 def code(text: str) -> str:
@@ -72,9 +77,9 @@ def test_the_check_sees_only_the_inventory_and_runs_on_the_measured_state(server
 
 
 def test_a_check_that_holds_at_the_start_is_repaired_then_doubted(server: StubLLMServer, tmp_path: Path) -> None:
-    """``judge = True`` tests nothing: it also holds in the start scene, where no goal holds.  The
-    repair request says so; repeated, the verdict is kept but low-confidence (``holds_at_start``)."""
-    server.respond_with(lambda request: code(ALWAYS_ACHIEVED))
+    """A check that only asks "nothing tilted?" also holds in the start scene, where no goal holds.
+    The repair request says so; repeated, the verdict is kept but low-confidence (``holds_at_start``)."""
+    server.respond_with(lambda request: code(NOTHING_TILTED))
     _, judged = judge(tmp_path, server, "oracle,displaced")
     assert len(server.requests) == 2 * len(judged)  # the first answer and its repair, per state
     assert HOLDS_AT_START in prompt_text(server.requests[1])
@@ -83,7 +88,7 @@ def test_a_check_that_holds_at_the_start_is_repaired_then_doubted(server: StubLL
                                                                                        "holds_at_start"), r
         assert r["errors"] == [f"code: {HOLDS_AT_START}"]
     server.respond_with(lambda request: code(MATCHING_BOWL_CHECK if HOLDS_AT_START in prompt_text(request)
-                                             else ALWAYS_ACHIEVED))
+                                             else NOTHING_TILTED))
     _, judged = judge(tmp_path / "repaired", server, "oracle,displaced")
     assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
         (r["label"], "repair", "high") for r in judged]
@@ -96,6 +101,29 @@ def test_a_check_that_fails_only_on_the_start_scene_is_not_held_against_it(serve
         "inside = [o for o in objects if o['kind'] == 'block' and o['inside']]\nfirst = inside[0]\n" + MATCHING_BOWL_CHECK))
     _, judged = judge(tmp_path, server, "oracle")
     assert [(r["verdict"], r["source"], r["calls"], r["errors"]) for r in judged] == [(True, "code", 1, [])]
+
+
+def test_a_blind_check_is_repaired_with_what_it_missed_then_doubted(server: StubLLMServer, tmp_path: Path) -> None:
+    """``judge = False`` reads nothing of the scene; ``o['inside'] != 'bowl'`` compares with a value
+    no record can have.  Each gets the repair request naming its fault (the second with the values
+    ``inside`` really has); repeated, the verdict is kept but low-confidence (``blind_check``)."""
+    for answer, needle in ((NEVER_ACHIEVED, "reads none of the measured keys"),
+                           (IN_A_BOWL_WORD, "compares \"inside\" with 'bowl'")):
+        server.respond_with(lambda request, a=answer: code(a))
+        before = len(server.requests)
+        _, judged = judge(tmp_path / needle[:6], server, "oracle,displaced")
+        repair = prompt_text(server.requests[before + 1])
+        assert needle in repair and len(server.requests) - before == 2 * len(judged)
+        for r in judged:
+            assert (r["verdict"], r["source"], r["confidence"], r["low_confidence"]) == (False, "repair", "low",
+                                                                                           "blind_check"), r
+            assert len(r["errors"]) == 1 and needle in r["errors"][0]
+    assert "bowl with obj_id" in repair  # the values of "inside" in this scene: the bowls' full names
+    server.respond_with(lambda request: code(MATCHING_BOWL_CHECK if "compares" in prompt_text(request)
+                                             else IN_A_BOWL_WORD))
+    _, judged = judge(tmp_path / "repaired", server, "oracle,displaced")
+    assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
+        (r["label"], "repair", "high") for r in judged]
 
 
 def test_goalcheck_is_a_text_prompt() -> None:

@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+from capmj.agents.check_reads import blind_problem
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_records import PROMPT, RecordsReporter
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
@@ -61,7 +62,13 @@ class GoalCheckReporter(RecordsReporter):
         run = super()._check(session, call, text, ctx, last)
         if run.problem is not None or self._start_state is None:
             return run
-        at_start = rerun_check(session, call, run.code, {"objects": records(self._start_state, self._start)},
+        start = records(self._start_state, self._start)
+        blind = blind_problem(run.code, (self._records(session, ctx), start))
+        if blind is not None:
+            session.record(call, "blind", blind)
+            return dataclasses.replace(run, doubt="blind_check") if last else CheckRun(
+                None, problem=blind, code=run.code)
+        at_start = rerun_check(session, call, run.code, {"objects": start},
                                f"<{PROMPT} {session.attempt}.{call.n} start>", "start scene")
         if at_start.verdict is not True:
             return run

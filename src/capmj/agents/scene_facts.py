@@ -35,7 +35,7 @@ from capmj.sim.pose import wxyz
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
 
-__all__ = ["ObjectFacts", "area_of", "facts_text", "resolve_name", "scene_facts", "state_from_api"]
+__all__ = ["AREAS", "OUTSIDE", "ObjectFacts", "area_of", "facts_text", "resolve_name", "scene_facts", "state_from_api"]
 
 
 @dataclass(frozen=True)
@@ -62,9 +62,14 @@ def state_from_api(api: Mapping[str, Callable[..., Any]], objects: Sequence[Obje
     return SceneState(tuple(objects), poses)
 
 
+OUTSIDE = "outside the workspace"
+AREAS = (*P.QUADRANTS, OUTSIDE)
+"""Every value :func:`area_of` gives."""
+
+
 def area_of(pos: Any) -> str:
-    """The quarter of the workspace ``pos`` lies in ("top left", ...), or "outside the workspace"."""
-    return next((q for q in P.QUADRANTS if P.in_area(pos, q)), "outside the workspace")
+    """The quarter of the workspace ``pos`` lies in ("top left", ...), or :data:`OUTSIDE`."""
+    return next((q for q in P.QUADRANTS if P.in_area(pos, q)), OUTSIDE)
 
 
 def scene_facts(state: SceneState) -> tuple[ObjectFacts, ...]:
