@@ -19,7 +19,8 @@ model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; a
 re-plan achieved states at chance.  A verdict whose reason copies the prompt's own example
 (``Report.doubt``, set by :class:`~capmj.agents.reporter_checked.CheckedReporter`) is no evidence
 about the scene either, nor is a check that says "achieved" of the scene the robot started from
-(:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`): no task's goal holds there.  The ``careful`` loop
+(:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`): no task's goal holds there, nor is a
+check whose text cannot depend on the scene (``blind_check``).  The ``careful`` loop
 (:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
 """

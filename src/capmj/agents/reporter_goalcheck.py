@@ -21,6 +21,11 @@ result out of the question:
   verdict is kept but doubted (``holds_at_start``, low-confidence: the ``careful`` loop does not act
   on it).  A check that *fails* on the start scene is not held against it (``[...][0]`` of the blocks
   in a zone that is empty at the start).
+* before that, its code is read (:func:`capmj.agents.check_reads.blind_problem`): a check that
+  reads none of the keys acting changes, or compares one with a value no record can have
+  (``b["inside"] != "zone"``), gives one verdict whatever the scene.  The repair request names the
+  fault and the values the key has; still blind after it, the verdict is kept but doubted
+  (``blind_check``).
 
 A consequence that makes the judge affordable: every state of one episode gets the same question,
 so with ``--llm-cache`` the model is asked once per (task, seed), not once per state.
