@@ -10,8 +10,10 @@ text, and this module finds both without running anything (the code is read with
   the keys acting can change), e.g. ``judge = False`` or a filter on colours alone;
 * it compares a key with a **value no record has**, e.g. ``b["inside"] != "zone"`` (the zones'
   names are ``"green zone"`` ...) or ``o["area"] == "left"``: the comparison gives the same answer in
-  every scene.  The values a key can have are those of the records of the scenes given (the final
-  and the start scene) and the documented words (:data:`WORDS`).
+  every scene.  The values a key can have are those of the records of the scenes given, the
+  names of the objects that could fill it (a zone's or bowl's for ``inside``, a movable object's
+  for ``below`` ...) and the documented words (:data:`WORDS`); so the start scene alone gives
+  them, and a repair request that lists them says nothing of the result.
 
 :func:`blind_problem` states the first such problem as a sentence the repair request can quote,
 with the values the key really has, so the model can mend the comparison it wrote.

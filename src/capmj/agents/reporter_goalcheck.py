@@ -68,7 +68,7 @@ class GoalCheckReporter(RecordsReporter):
         if run.problem is not None or self._start_state is None:
             return run
         start = records(self._start_state, self._start)
-        blind = blind_problem(run.code, (self._records(session, ctx), start))
+        blind = blind_problem(run.code, (start,))  # the values from the start: the question shows no result
         if blind is not None:
             session.record(call, "blind", blind)
             return dataclasses.replace(run, doubt="blind_check") if last else CheckRun(
