@@ -17,8 +17,8 @@ from typing import Any
 import pytest
 from llm_stub_server import StubLLMServer, prompt_text
 
-from capmj.agents.prompt_files import load_prompt
 from capmj.agents.choices import REPORTER_PROMPTS
+from capmj.agents.prompt_files import load_prompt
 from capmj.agents.reporter import make_reporter
 from capmj.agents.reporter_records import PROMPT, REPAIR_TEMPERATURE, RecordsReporter
 from capmj.agents.scene_facts import area_of

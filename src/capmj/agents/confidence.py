@@ -30,8 +30,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from capmj.agents.verdict import Report
 from capmj.agents.scene_facts import resolve_name
+from capmj.agents.verdict import Report
 from capmj.sim.objects import ObjectSpec
 
 __all__ = ["CONFIDENCE_LEVELS", "LOW_CONFIDENCE", "Assessment", "assess"]

@@ -28,7 +28,6 @@ from capmj.errors import ConfigError
 from capmj.llm import LLMConfig
 from capmj.llm.cache import env_cache_dir
 
-
 DEFAULT_REPLAN_TEMPERATURE = 0.7
 """Sampling temperature of the first planner request of attempts 2, 3, ... (at 0 a small model
 repeated its failed plan byte for byte); retries after an identical answer go hotter

@@ -25,9 +25,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from capmj.agents.lmp import LMPCall, LMPSession, prompts_dir
 import numpy as np
 
+from capmj.agents.lmp import LMPCall, LMPSession, prompts_dir
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import ConfigError, PlanError, describe
 
