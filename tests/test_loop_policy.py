@@ -150,6 +150,23 @@ def test_after_an_error_a_low_confidence_verdict_resets_as_the_thesis_does(serve
     first, second = result.llm.attempts
     assert first.error is not None and first.verdict is False and first.confidence == "low"
     assert first.rule == "error" and second.reset is True
+    told = requests_of(server, "planner")[1]["messages"]
+    assert "not sure" not in str(told)  # the unfounded verdict is not passed on ...
+    server.reset()
+    server.respond_with(Router(planner=planner(THREE + "\ncopied = [][0]", THREE + "\n" + REST)))
+    episode(agent(server, reporter="none", attempts=2, loop_policy="careful"))
+    assert requests_of(server, "planner")[1]["messages"] == told  # ... the re-plan is the reporter-less loop's
+
+
+def test_after_an_error_a_high_confidence_verdict_is_passed_on(server: StubLLMServer) -> None:
+    def every_block_wrong(request: dict[str, Any]) -> str:
+        blocks = sorted(set(re.findall(r"movable [^:\n]+ block with obj_id \d+", prompt_text(request))))
+        return code(f"judge = False\nreason = 'no block is where it belongs'\nwrong = {blocks!r}")
+
+    result = run(server, "careful", THREE + "\ncopied = [][0]", THREE + "\n" + REST, reporter=every_block_wrong)
+    first = result.llm.attempts[0]
+    assert (first.rule, first.confidence) == ("error", "high")
+    assert "no block is where it belongs" in str(requests_of(server, "planner")[1]["messages"])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -180,6 +197,8 @@ def test_careful_rules_fire_only_where_they_should() -> None:
         "achieved_after_error"
     assert decide("careful", Outcome(error=True, judged=True, verdict=True, assessment=low)).rule == "error"
     assert decide("careful", Outcome(error=True)).rule == "error"
+    assert decide("careful", Outcome(error=True, judged=True, verdict=False, assessment=low)).shows_report is False
+    assert decide("thesis", Outcome(error=True, judged=True, verdict=False, assessment=low)).shows_report is True
     d = decide("careful", Outcome(judged=True, verdict=False, assessment=high, wrong_share=0.5))
     assert (d.rule, d.stop, d.reset) == ("partial_replan", False, False)
     assert decide("careful", Outcome(judged=True, verdict=False, assessment=high, wrong_share=1.0)).rule == \

@@ -164,7 +164,8 @@ class LLMAgent:
                     break
                 reset = decision.reset
                 if outcome.not_run is None:
-                    feedback = self._feedback(ctx, record, report, outcome, from_initial=from_initial, reset=reset)
+                    told = report if decision.shows_report else None
+                    feedback = self._feedback(ctx, record, told, outcome, from_initial=from_initial, reset=reset)
                     feedbacks.append(feedback)
                 elif feedback is not None and feedback.reset != reset:
                     feedback = replace(feedback, reset=reset)  # the next plan starts where this attempt left it

@@ -20,7 +20,10 @@ c. **stop on low confidence.** A verdict :func:`capmj.agents.confidence.assess` 
    is no evidence that the state is wrong, and an unfounded "no" was what undid reached goals
    (H and J reached the goal, the reporter said no, the re-plan undid it).  After a plan that
    raised, a low-confidence verdict does not stop: the error is evidence, so the thesis rule
-   (``error``: reset and re-plan) applies.
+   (``error``: reset and re-plan) applies -- and the next plan is not told that verdict
+   (:attr:`Decision.shows_report`), so it is asked exactly what the loop without a reporter asks.
+   Told an unfounded "not achieved", the re-plan of task J (seed 10001) differed from the one the
+   loop without a reporter wrote, and undid a goal the failed plan had reached.
 
 Without a reporter both policies are the same.  Their names: :data:`capmj.agents.choices.LOOP_POLICIES`.  The rules are named in
 :data:`capmj.records.LOOP_RULES`; :func:`decide` is the one place that chooses among them.
@@ -58,11 +61,13 @@ class Outcome:
 
 @dataclass(frozen=True)
 class Decision:
-    """The rule that fired, whether the loop stops, and whether a next attempt resets the scene."""
+    """The rule that fired, whether the loop stops, whether a next attempt resets the scene, and
+    whether the next plan is told the reporter's verdict."""
 
     rule: str
     stop: bool
     reset: bool = True
+    shows_report: bool = True
 
     def __post_init__(self) -> None:
         if self.rule not in LOOP_RULES:
@@ -95,7 +100,7 @@ def decide(policy: str, outcome: Outcome, *, on_unknown: str = "replan", reset: 
             return Decision("achieved_after_error", True)
         if careful and outcome.verdict is False and high and outcome.wrong_share < 1.0:
             return Decision("partial_replan", False, reset=False)
-        return Decision("error", False)
+        return Decision("error", False, shows_report=not careful or high)
     if careful and not high:
         return Decision("low_confidence_stop", True)
     if outcome.verdict is True:
