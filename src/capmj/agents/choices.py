@@ -15,11 +15,12 @@ REPORTERS = ("none", "text", "vlm")
 """``--reporter``: no reporter, :class:`~capmj.agents.reporter.TextReporter` (and its prompts) or
 :class:`~capmj.agents.reporter_vlm.VLMReporter`."""
 
-REPORTER_PROMPTS = ("thesis", "checked", "records", "goalcheck")
+REPORTER_PROMPTS = ("thesis", "checked", "records", "goalcheck", "relations")
 """``--reporter-prompt``: :class:`~capmj.agents.reporter.TextReporter`,
 :class:`~capmj.agents.reporter_checked.CheckedReporter`,
-:class:`~capmj.agents.reporter_records.RecordsReporter` or
-:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`."""
+:class:`~capmj.agents.reporter_records.RecordsReporter`,
+:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter` or
+:class:`~capmj.agents.reporter_relations.RelationsReporter`."""
 
 LOOP_POLICIES = ("thesis", "careful")
 """``--loop-policy``: see :mod:`capmj.agents.loop_policy`."""

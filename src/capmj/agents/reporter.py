@@ -22,6 +22,7 @@ from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.reporter_goalcheck import GoalCheckReporter
+from capmj.agents.reporter_relations import RelationsReporter
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.reporter_vlm import VLMReporter
 from capmj.agents.verdict import CheckRun, Report, check, direct_verdict, parse_verdict
@@ -92,6 +93,8 @@ def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis
         return RecordsReporter(prompt_directory)
     if mode == "text" and prompt == "goalcheck":
         return GoalCheckReporter(prompt_directory)
+    if mode == "text" and prompt == "relations":
+        return RelationsReporter(prompt_directory)
     if mode == "text":
         return TextReporter()
     if mode == "vlm":

@@ -41,7 +41,7 @@ from typing import Any
 
 from capmj.agents.check_reads import blind_problem
 from capmj.agents.lmp import LMPCall, LMPSession
-from capmj.agents.reporter_records import PROMPT, RecordsReporter
+from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun, rerun_check
 
@@ -74,7 +74,7 @@ class GoalCheckReporter(RecordsReporter):
             return dataclasses.replace(run, doubt="blind_check") if last else CheckRun(
                 None, problem=blind, code=run.code)
         at_start = rerun_check(session, call, run.code, {"objects": start},
-                               f"<{PROMPT} {session.attempt}.{call.n} start>", "start scene")
+                               f"<{self.prompt_file} {session.attempt}.{call.n} start>", "start scene")
         if at_start.verdict is not True:
             return run
         return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(

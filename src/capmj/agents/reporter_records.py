@@ -71,6 +71,8 @@ class RecordsReporter:
 
     mode = "text"
     prompt = "records"
+    prompt_file = PROMPT
+    """The prompt file under ``prompts/`` and the LMP name in transcripts."""
 
     def __init__(self, prompt_directory: Any = None) -> None:
         self._start: dict[int, str] = {}
@@ -94,11 +96,11 @@ class RecordsReporter:
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
         question = self.question(session, ctx, goal)
-        messages = session.messages(session.prompt(PROMPT).render(question))
+        messages = session.messages(session.prompt(self.prompt_file).render(question))
         errors: tuple[str, ...] = ()
         for source, sampling in (("code", {}), ("repair", {"temperature": REPAIR_TEMPERATURE,
                                                             "seed": derived_seed(f"capmj-records-repair/{question}")})):
-            call = session.next_call(PROMPT, goal)
+            call = session.next_call(self.prompt_file, goal)
             text = session.ask(call, messages, **sampling)
             run = self._check(session, call, text, ctx, last=source == "repair")
             problem = run.problem
@@ -108,11 +110,14 @@ class RecordsReporter:
             errors += (f"{source}: {problem}",)
             copied = COPIED_RECORDS_HINT if _COPIES_RECORDS.match(text) else ""
             messages = messages + [{"role": "assistant", "content": text}, {"role": "user", "content": (
-                f"# The checking code above failed: {problem}\n{copied}# Write the corrected complete checking code "
-                f"for the same goal, using only `objects` (dicts with keys {', '.join(RECORD_KEYS)}).\n"
-                f"# Set judge = True or False, reason = a short sentence, wrong = [full names of the movable "
-                f"objects that break the goal].\n# goal: {' '.join(goal.split())}\n")}]
+                f"# The checking code above failed: {problem}\n{copied}{self.repair_request(goal)}")}]
         return self._direct(session, ctx, goal, errors)
+
+    def repair_request(self, goal: str) -> str:
+        """What the repair request asks for, after the problem it quotes."""
+        return (f"# Write the corrected complete checking code for the same goal, using only `objects` (dicts with "
+                f"keys {', '.join(RECORD_KEYS)}).\n# Set judge = True or False, reason = a short sentence, wrong = "
+                f"[full names of the movable objects that break the goal].\n# goal: {' '.join(goal.split())}\n")
 
     def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
         """The answer's check run on the scene's records.
@@ -120,7 +125,7 @@ class RecordsReporter:
         ``last``: no repair request follows, so a subclass keeps a doubtful verdict (``CheckRun.doubt``)
         instead of returning a problem."""
         env: dict[str, Any] = {"objects": self._records(session, ctx)}  # fresh: code may mutate it
-        return check(session, call, text, env, f"<{PROMPT} {session.attempt}.{call.n}>")
+        return check(session, call, text, env, f"<{self.prompt_file} {session.attempt}.{call.n}>")
 
     def _direct(self, session: LMPSession, ctx: Any, goal: str, errors: tuple[str, ...]) -> Report:
         """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""

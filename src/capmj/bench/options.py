@@ -71,8 +71,9 @@ AGENT_FLAGS: tuple[Flag, ...] = (
          "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
          "on a low-confidence one; docs/llm.md)", choices=LOOP_POLICIES),
     Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code), "
-         "checked (capmj binds the scene facts as text), records (as records for checking code) or goalcheck (a "
-         "check written from the goal and the objects, run on the measured records; docs/judge.md)",
+         "checked (capmj binds the scene facts as text), records (as records for checking code), goalcheck (a "
+         "check written from the goal and the objects, run on the measured records) or relations (the goal as calls "
+         "of pre-bound relation checks; docs/judge.md)",
          choices=REPORTER_PROMPTS),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),

@@ -62,7 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "binds the scene facts, the model compares them with the goal), records (capmj binds "
                         "the facts as records, the model's checking code compares them) or goalcheck (the check "
                         "is written from the goal and the objects alone, then run on the measured records of the "
-                        "state and of the start scene); default thesis")
+                        "state and of the start scene) or relations (the goal written as calls of capmj's pre-bound relation checks, "
+                        "measured on the state and the start scene); default thesis")
     p.add_argument("--per-task", dest="per_task", type=int, default=None, metavar="N",
                    help="judge a deterministic stratified subset: N cases per task, drawn in turn from oracle, "
                         "negatives, near_inside, near_outside (capmj.judge.subset); default: every case")

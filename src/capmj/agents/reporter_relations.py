@@ -1,0 +1,125 @@
+"""The ``relations`` text-reporter prompt: the model names the relations the goal asks for, as
+calls of capmj's pre-bound checks, and capmj measures them on the final and the start scene.
+
+Why, from the shared 1.5B model's ``goalcheck`` run on the judge's full set (20 tasks × 5 test
+seeds, 495 states): balanced accuracy 56 %, and for 86 of the 99 episodes with both an achieved
+and a failed state the verdict was the same for both.  The checks the model wrote failed in their
+plumbing (a name used before it was set, ``judge`` set to a constant, ``levels == list(range(...))``
+over the wrong objects), not in reading the goal.  The checks it wrote that were neither blind nor
+true of the start scene scored 71.5 %.
+
+So ``relations`` keeps what made ``goalcheck`` affordable and honest — the question holds only the
+goal and the inventory (the keys acting cannot change), the answer is written before the result is
+seen, and it runs on the start scene too, where no goal holds — and takes the plumbing away: the
+model writes calls such as ``require_inside(blocks(color="red"), zone("green"))`` and
+``require_stack(blocks(color="red"))`` (:mod:`capmj.agents.relation_checks`), each of which measures
+one relation and names the objects that break it.  The verdict is "achieved" exactly when no call
+failed; ``wrong`` is the objects the failed calls name, so a "not achieved" always names movable
+objects.  The prompt (``prompts/reporter_relations.py``) documents the calls and shows examples for
+goals that are none of the built-in tasks'.
+
+A check that calls no ``require_*`` tests nothing (``blind_check``); one that calls a name the
+prompt does not define gets the list of valid names (never a function written by
+``parse_function``: a made-up check would be a second, unmeasured reporter); one whose calls all
+pass on the start scene gets the ``HOLDS_AT_START`` repair.  After the one repair these keep
+their verdict but as low-confidence doubts, as in ``goalcheck``.  A check that still fails to run
+gets the ``checked`` question as ``direct`` (:class:`~capmj.agents.reporter_records.RecordsReporter`).
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+from typing import Any
+
+from capmj.agents.codeprep import undefined_calls
+from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.relation_checks import CHECKS, SELECTORS, relation_env
+from capmj.agents.reporter_goalcheck import GoalCheckReporter
+from capmj.agents.sandbox import extract_code, run_code
+from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
+from capmj.agents.verdict import CheckRun
+from capmj.errors import PlanError, describe
+
+__all__ = ["BLIND", "HOLDS_AT_START", "PROMPT", "RelationsReporter"]
+
+PROMPT = "reporter_relations"
+"""The prompt file (``prompts/reporter_relations.py``) and the LMP name in transcripts."""
+
+BLIND = "it calls none of the require_... checks, so it tests nothing: call the checks the goal asks for"
+"""The problem the repair request states when the answer makes no ``require_*`` call."""
+
+HOLDS_AT_START = ("every require_... call passes in the scene the robot started from, and no goal holds there: "
+                  "require what the goal asks the robot to achieve (where the objects must be, stacks, layers ...)")
+"""The problem the repair request states when the check finds nothing wrong with the start scene."""
+
+
+def calls_a_check(code: str) -> bool:
+    """Whether ``code`` calls one of :data:`~capmj.agents.relation_checks.CHECKS` (read with :mod:`ast`)."""
+    try:
+        tree = ast.parse(code)
+    except SyntaxError:
+        return True  # the sandbox reports it
+    return any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id in CHECKS
+               for n in ast.walk(tree))
+
+
+class RelationsReporter(GoalCheckReporter):
+    """``--reporter-prompt relations``: the goal as calls of pre-bound relation checks (see the module docstring)."""
+
+    prompt = "relations"
+    prompt_file = PROMPT
+
+    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
+        """The scene's inventory (the keys acting cannot change) and the goal."""
+        inventory = records_text(self._records(session, ctx), INVENTORY_KEYS)
+        return f"# The objects of this scene.\n{inventory}\n# goal: {' '.join(goal.split())}"
+
+    def repair_request(self, goal: str) -> str:
+        return (f"# Write the corrected complete check for the same goal: only calls of {', '.join(CHECKS)} "
+                f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {' '.join(goal.split())}\n")
+
+    def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]], scene: str,
+             label: str) -> CheckRun:
+        """Run prepared ``code`` on one scene's records: the verdict is that no required relation failed."""
+        start = records(self._start_state, self._start) if self._start_state is not None else None
+        env, failures = relation_env(rows, start)
+        failed = "error" if label == "result" else f"{label} error"
+        try:
+            run_code(code, env, budget=session.lmp_budget,
+                     filename=f"<{self.prompt_file} {session.attempt}.{call.n}{scene}>")
+        except PlanError as exc:
+            problem = describe(exc)
+            session.record(call, failed, problem)
+            return CheckRun(None, problem=problem, code=code)
+        verdict = not failures.items
+        session.record(call, label, f"judge = {verdict!r}\nreason = {failures.reason!r}\nwrong = {list(failures.wrong)!r}")
+        return CheckRun(verdict, failures.reason, failures.wrong, None, code)
+
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
+        rows = self._records(session, ctx)
+        known = set(relation_env(rows)[0])
+        code = ""
+        try:
+            code = extract_code(text)
+            missing = [m[0] for m in undefined_calls(code, known)]
+            if missing:
+                raise PlanError(f"NameError: {', '.join(missing)} is not defined; the checks are {', '.join(CHECKS)} "
+                                f"and the selectors {', '.join(SELECTORS)}")
+            code = session.prepare(code, dict.fromkeys(known), parent=call)  # drops benign imports only
+            session.record(call, "code", code)
+        except PlanError as exc:
+            problem = describe(exc)
+            session.record(call, "error", problem)
+            return CheckRun(None, problem=problem, code=code)
+        if not calls_a_check(code):
+            session.record(call, "blind", BLIND)
+            return CheckRun(None, problem=BLIND, code=code)
+        run = self._run(session, call, code, rows, "", "result")
+        if run.problem is not None or self._start_state is None:
+            return run
+        at_start = self._run(session, call, code, records(self._start_state, self._start), " start", "start scene")
+        if at_start.verdict is not True:
+            return run
+        return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(
+            None, problem=HOLDS_AT_START, code=code)

@@ -1,0 +1,137 @@
+"""The pre-bound relation checks of the ``relations`` reporter (:mod:`capmj.agents.relation_checks`),
+on hand-built records: each relation holds where it should, fails where it should, and names the
+objects that break it; bad arguments raise PlanError naming the valid choices."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from capmj.agents.relation_checks import CHECKS, relation_env
+from capmj.agents.sandbox import run_code
+from capmj.errors import PlanError
+
+
+def block(i: int, color: str, centre: tuple[float, float, float], *, size: str = "small", level: int = 1,
+          rests_on: str = "table", inside: str = "", tilted: bool = False, area: str = "top left",
+          start_area: str = "top left") -> dict[str, Any]:
+    return {"name": f"movable {size} {color} block with obj_id {i}", "kind": "block", "color": color, "size": size,
+            "area": area, "start_area": start_area, "rests_on": rests_on, "below": [], "level": level,
+            "inside": inside, "inside_color": "", "holds": [], "tilted": tilted, "centre": list(centre)}
+
+
+def place(i: int, kind: str, color: str, centre: tuple[float, float, float] = (0.5, 0.2, 0.0)) -> dict[str, Any]:
+    return {"name": f"{color} {kind} with obj_id {i}", "kind": kind, "color": color, "size": None, "area": "top right",
+            "start_area": "top right", "rests_on": "table", "below": [], "level": 1, "inside": "",
+            "inside_color": "", "holds": [], "tilted": False, "centre": list(centre)}
+
+
+ZONE = "green zone with obj_id 1"
+
+
+def tower(colors: list[str], *, inside: str = ZONE) -> list[dict[str, Any]]:
+    out: list[dict[str, Any]] = []
+    for k, c in enumerate(colors):
+        out.append(block(k + 2, c, (0.5, 0.2, 0.02 + 0.04 * k), level=k + 1, inside=inside,
+                         rests_on=out[-1]["name"] if out else "table"))
+    return out
+
+
+def run(rows: list[dict[str, Any]], code: str, start: list[dict[str, Any]] | None = None) -> tuple[bool, list[str], str]:
+    env, failures = relation_env(rows, start)
+    run_code(code, env)
+    assert failures.calls > 0
+    return not failures.items, sorted(failures.wrong), failures.reason
+
+
+def test_a_tower_in_its_zone_passes_and_a_block_off_it_is_named() -> None:
+    rows = [place(1, "zone", "green"), *tower(["red", "blue", "red"])]
+    assert run(rows, "require_inside(blocks(), zone('green'))\nrequire_stack(blocks())\n"
+                     "require_alternating(blocks(), first_color='red')")[0]
+    off = [*rows[:3], block(4, "red", (0.6, -0.2, 0.02))]
+    ok, wrong, reason = run(off, "require_inside(blocks(), zone('green'))\nrequire_stack(blocks())")
+    assert not ok and wrong == [off[3]["name"]] and "not in the green zone" in reason and "stack" in reason
+    ok, wrong, _ = run(rows, "require_alternating(blocks(), first_color='blue')")
+    assert not ok and wrong == [rows[1]["name"]]  # the bottom block has the wrong colour
+
+
+def test_two_towers_are_not_one_stack() -> None:
+    rows = [place(1, "zone", "green"), *tower(["red", "blue"]),
+            block(4, "red", (0.55, 0.2, 0.02), inside=ZONE), block(5, "blue", (0.55, 0.2, 0.06), level=2, inside=ZONE,
+                                                                  rests_on="movable small red block with obj_id 4")]
+    ok, wrong, _ = run(rows, "require_stack(blocks())")
+    assert not ok and set(wrong) == {rows[3]["name"], rows[4]["name"]}
+    assert run(rows, "require_layers(blocks(), [2, 2])")[0]
+    assert not run(rows, "require_layers(blocks(), [3, 1])")[0]
+
+
+def test_selectors_read_colour_words_sizes_start_areas_and_sides() -> None:
+    rows = [block(1, "red", (0.3, -0.2, 0.02), size="big", start_area="top left"),
+            block(2, "blue", (0.3, 0.1, 0.02), start_area="top right"),
+            block(3, "yellow", (0.6, 0.3, 0.02), size="big", start_area="bottom right")]
+    env, _ = relation_env(rows)
+    names = lambda rs: [r["color"] for r in rs]  # noqa: E731
+    assert names(env["blocks"](color="warm")) == ["red", "yellow"]
+    assert names(env["blocks"](color="cool")) == ["blue"]
+    assert names(env["blocks"](size="bigger")) == ["red", "yellow"]
+    assert names(env["blocks"](start_area="top right")) == ["blue"]
+    assert names(env["other_blocks"](env["blocks"](color="red"))) == ["blue", "yellow"]
+    assert names(env["blocks_beside"](rows[0], "right", 0.05)) == ["blue", "yellow"]
+    assert names(env["blocks_beside"](rows[0], "right", 0.35)) == ["yellow"]
+    assert names(env["blocks_beside"](rows[0], "front", 0.1)) == ["yellow"]
+
+
+def test_places_may_be_areas_colour_words_or_any_of_a_list() -> None:
+    bowls = [place(1, "bowl", "red"), place(2, "bowl", "blue")]
+    rows = [*bowls, block(3, "red", (0.5, 0.2, 0.03), inside=bowls[1]["name"], area="bottom right"),
+            block(4, "blue", (0.5, -0.2, 0.03), area="bottom left")]
+    ok, wrong, _ = run(rows, "require_inside(blocks(), bowls())")
+    assert not ok and wrong == [rows[3]["name"]]
+    assert run(rows, "require_outside(blocks(color='red'), bowl('red'))")[0]
+    assert run(rows, "require_inside(blocks(color='red'), 'blue bowl')")[0]
+    assert run(rows, "require_inside(blocks(color='blue'), 'bottom left')")[0]
+    assert run(rows, "require_count(blocks(), bowls(), 1)")[0]
+    assert not run(rows, "require_count(blocks(), bowls(), 2)")[0]
+
+
+def test_circles_rows_unmoved_and_distinct_colours() -> None:
+    import math
+
+    ring = [block(i + 1, "red" if i % 2 else "blue", (0.5 + 0.1 * math.cos(i * math.pi / 3),
+                                                      0.1 * math.sin(i * math.pi / 3), 0.02)) for i in range(6)]
+    ball = {**place(9, "ball", "white", (0.5, 0.0, 0.02)), "kind": "ball"}
+    assert run([*ring, ball], "require_circle(blocks(), around=ball())\nrequire_alternating(blocks())")[0]
+    bent = [*ring[:5], {**ring[5], "centre": [0.5, -0.02, 0.02]}]
+    ok, wrong, _ = run(bent, "require_circle(blocks())")
+    assert not ok and wrong == [ring[5]["name"]]
+    assert not run([*ring, {**ball, "centre": [0.6, 0.1, 0.02]}], "require_circle(blocks(), around=ball())")[0]
+    row = [block(i + 1, "red", (0.4 + 0.05 * i, 0.1, 0.02)) for i in range(4)]
+    assert run(row, "require_row(blocks())")[0]
+    assert not run(ring, "require_row(blocks())")[0]
+    moved = [{**row[0], "centre": [0.4, 0.2, 0.02]}, *row[1:]]
+    ok, wrong, _ = run(moved, "require_unmoved(blocks())", start=row)
+    assert not ok and wrong == [row[0]["name"]]
+    ok, wrong, _ = run(row, "require_different_colors(blocks())")
+    assert not ok and len(wrong) == 3
+
+
+@pytest.mark.parametrize(("code", "needle"), [
+    ("require_inside(blocks(), zone('purple'))", "the zones here are ['green']"),
+    ("require_inside(blocks(), 'the table')", "is not a place"),
+    ("blocks(size='huge')", "valid: big, bigger"),
+    ("blocks_beside(blocks()[0], 'above')", "valid: left, right, front, rear"),
+    ("require_stack(['no such block'])", "is not an object of this scene"),
+])
+def test_bad_arguments_name_the_valid_choices(code: str, needle: str) -> None:
+    env, _ = relation_env([place(1, "zone", "green"), *tower(["red"])])
+    with pytest.raises(PlanError, match="ValueError") as err:
+        run_code(code, env)
+    assert needle in str(err.value)
+
+
+def test_every_check_is_bound_and_counted() -> None:
+    env, failures = relation_env([place(1, "zone", "green"), *tower(["red", "blue"])])
+    assert set(CHECKS) <= set(env)
+    run_code("require_on_table(blocks())\nrequire_stack(blocks())", env)
+    assert failures.calls == 2 and failures.wrong == ("movable small blue block with obj_id 3",)

@@ -1,0 +1,109 @@
+"""The ``relations`` reporter prompt (issue #26 item 3): the model writes the goal as calls of
+pre-bound relation checks; capmj measures them on the final and the start scene.
+
+States are real settled MuJoCo states of the judge set; the answers come from the scripted local
+HTTP server (tests/llm_stub_server.py): fixtures that read the prompt, not results.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from llm_stub_server import StubLLMServer, prompt_text
+
+from capmj.agents.prompt_files import load_prompt
+from capmj.agents.relation_checks import CHECKS
+from capmj.agents.reporter import make_reporter
+from capmj.agents.reporter_relations import BLIND, HOLDS_AT_START, RelationsReporter
+from capmj.bench.cli import main
+
+SEED = 10001
+BOWLS = "put-block-into-matching-bowl"
+MATCHING = "for b in bowls():\n    require_inside(blocks(color=b['color']), b)"
+"""A human's check of "Put the blocks in the bowls with matching colors." (the scene has one distractor)."""
+
+
+def code(text: str) -> str:
+    return f"```python\n{text.strip()}\n```"
+
+
+def judge(tmp_path: Path, server: StubLLMServer, kinds: str, task: str = BOWLS) -> list[dict[str, Any]]:
+    out = tmp_path / "out"
+    rc = main(["judge", "--tasks", task, "--seeds", str(SEED), "--kinds", kinds, "--out", str(out), "--no-progress",
+               "--reporter", "text", "--reporter-prompt", "relations", "--model", "openai/stub", "--api-base",
+               server.base_url, "--llm-timeout", "10"])
+    assert rc == 0
+    assert json.loads((out / "summary.json").read_text())["reporter_prompt"] == "relations"
+    return [json.loads(line) for line in (out / "judged.jsonl").read_text().splitlines()]
+
+
+def test_the_goal_as_relations_agrees_with_the_predicate_and_names_what_is_wrong(server: StubLLMServer,
+                                                                                tmp_path: Path) -> None:
+    """One question per episode (goal + unchanging keys); each state's verdict follows its label, and
+    every "not achieved" names a movable object (high confidence)."""
+    prompts: list[str] = []
+
+    def answer(request: dict[str, Any]) -> str:
+        prompts.append(prompt_text(request))
+        return code(MATCHING)
+
+    server.respond_with(answer)
+    judged = judge(tmp_path, server, "oracle,displaced,wrong_bowl,near_outside")
+    assert len(judged) >= 3 and any(not r["label"] for r in judged)
+    for r in judged:
+        assert (r["source"], r["verdict"], r["confidence"]) == ("code", r["label"], "high"), r
+        assert bool(r["wrong"]) == (not r["label"]) and all(w.startswith("movable") for w in r["wrong"])
+    assert len(set(prompts)) == 1
+    assert "'inside'" not in prompts[0].split("# The objects of this scene.")[1]  # no measured key is shown
+    assert "require_stack(objs)" in prompts[0] and "# goal: Put the blocks in the bowls" in prompts[0]
+
+
+def test_a_made_up_check_is_refused_with_the_valid_names_not_written_by_parse_function(server: StubLLMServer,
+                                                                                      tmp_path: Path) -> None:
+    server.respond_with(lambda request: code(
+        MATCHING if "is not defined" in prompt_text(request) else "require_matching_bowls(blocks())"))
+    judged = judge(tmp_path, server, "oracle,displaced")
+    assert len(server.requests) == 2 * len(judged)  # the answer and its repair: no parse_function call
+    repair = prompt_text(server.requests[1])
+    assert "require_matching_bowls is not defined" in repair and all(c in repair for c in CHECKS)
+    assert [(r["verdict"], r["source"]) for r in judged] == [(r["label"], "repair") for r in judged]
+
+
+def test_a_check_without_a_required_relation_is_blind(server: StubLLMServer, tmp_path: Path) -> None:
+    """``judge = False`` tests nothing: the repair request says so; repeated, the ``checked`` question decides."""
+    server.respond_with(lambda request: code("judge = False"))
+    judged = judge(tmp_path, server, "oracle")
+    assert BLIND in prompt_text(server.requests[1])
+    assert [(r["source"], r["low_confidence"], r["errors"][:2]) for r in judged] == [
+        ("direct", "direct_fallback", [f"code: {BLIND}", f"repair: {BLIND}"])]
+
+
+def test_a_check_that_holds_at_the_start_is_repaired_then_doubted(server: StubLLMServer, tmp_path: Path) -> None:
+    """Requiring only that the blocks stand on the table holds at the start, where no goal holds."""
+    server.respond_with(lambda request: code("require_on_table(blocks())"))
+    judged = judge(tmp_path, server, "oracle,displaced")
+    assert HOLDS_AT_START in prompt_text(server.requests[1])
+    for r in judged:
+        assert (r["source"], r["low_confidence"], r["errors"]) == ("repair", "holds_at_start",
+                                                                   [f"code: {HOLDS_AT_START}"]), r
+    server.respond_with(lambda request: code(MATCHING if HOLDS_AT_START in prompt_text(request)
+                                             else "require_on_table(blocks())"))
+    judged = judge(tmp_path / "repaired", server, "oracle,displaced")
+    assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
+        (r["label"], "repair", "high") for r in judged]
+
+
+def test_the_prompt_examples_run_and_relations_is_a_text_prompt() -> None:
+    """Every example of ``prompts/reporter_relations.py`` calls only documented names (each is valid Python)."""
+    import ast
+
+    text = load_prompt("reporter_relations").template
+    bodies = [part.split("\n\n")[0] for part in text.split("# goal: ")[1:]]
+    assert len(bodies) >= 6
+    for body in bodies:
+        tree = ast.parse(body.split("\n", 1)[1])
+        called = {n.func.id for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
+        assert called & set(CHECKS), body
+    assert isinstance(make_reporter("text", None, "relations"), RelationsReporter)
