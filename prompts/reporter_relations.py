@@ -16,7 +16,7 @@
 # The checks (objs: a list of objects or one object):
 #   require_inside(objs, place)          every one of objs is in the place
 #   require_outside(objs, place)         none of objs is in the place
-#   require_stack(objs)                  objs form one upright tower, one on top of the other
+#   require_stack(objs, place=None)      objs form one upright tower, one on top of the other (in the place)
 #   require_layers(objs, [n1, n2, ...])  n1 of objs on the table, n2 on top of them, ... and nothing higher
 #   require_on_table(objs)               every one of objs stands upright on the table, not on another block
 #   require_unmoved(objs)                objs are still where they started
@@ -30,13 +30,15 @@
 
 #@ stop: ["\n\n# goal:", "\nobjects = [", "\n    {'name': "]
 
-# goal: Put the yellow and the blue blocks in the red bowl.
-require_inside(blocks(color=["yellow", "blue"]), bowl("red"))
+# goal: Put every block in one of the bowls.
+require_inside(blocks(), bowls())
+
+# goal: Stack the red and the blue blocks in the white zone.
+require_stack(blocks(color=["red", "blue"]), zone("white"))
 
 # goal: Stack only the small blocks in the purple zone and leave the big blocks where they are.
 small = blocks(size="small")
-require_inside(small, zone("purple"))
-require_stack(small)
+require_stack(small, zone("purple"))
 require_outside(other_blocks(small), zone("purple"))
 require_unmoved(blocks(size="big"))
 

@@ -50,7 +50,7 @@ def test_a_tower_in_its_zone_passes_and_a_block_off_it_is_named() -> None:
     assert run(rows, "require_inside(blocks(), zone('green'))\nrequire_stack(blocks())\n"
                      "require_alternating(blocks(), first_color='red')")[0]
     off = [*rows[:3], block(4, "red", (0.6, -0.2, 0.02))]
-    ok, wrong, reason = run(off, "require_inside(blocks(), zone('green'))\nrequire_stack(blocks())")
+    ok, wrong, reason = run(off, "require_stack(blocks(), zone('green'))")
     assert not ok and wrong == [off[3]["name"]] and "not in the green zone" in reason and "stack" in reason
     ok, wrong, _ = run(rows, "require_alternating(blocks(), first_color='blue')")
     assert not ok and wrong == [rows[1]["name"]]  # the bottom block has the wrong colour
@@ -74,6 +74,7 @@ def test_selectors_read_colour_words_sizes_start_areas_and_sides() -> None:
     names = lambda rs: [r["color"] for r in rs]  # noqa: E731
     assert names(env["blocks"](color="warm")) == ["red", "yellow"]
     assert names(env["blocks"](color="cool")) == ["blue"]
+    assert names(env["blocks"](color=["warm"])) == ["red", "yellow"]
     assert names(env["blocks"](size="bigger")) == ["red", "yellow"]
     assert names(env["blocks"](start_area="top right")) == ["blue"]
     assert names(env["other_blocks"](env["blocks"](color="red"))) == ["blue", "yellow"]

@@ -57,7 +57,7 @@ def test_the_goal_as_relations_agrees_with_the_predicate_and_names_what_is_wrong
         assert bool(r["wrong"]) == (not r["label"]) and all(w.startswith("movable") for w in r["wrong"])
     assert len(set(prompts)) == 1
     assert "'inside'" not in prompts[0].split("# The objects of this scene.")[1]  # no measured key is shown
-    assert "require_stack(objs)" in prompts[0] and "# goal: Put the blocks in the bowls" in prompts[0]
+    assert "require_stack(objs, place=None)" in prompts[0] and "# goal: Put the blocks in the bowls" in prompts[0]
 
 
 def test_a_made_up_check_is_refused_with_the_valid_names_not_written_by_parse_function(server: StubLLMServer,

@@ -151,8 +151,9 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
                 and sign * (start[r["name"]]["centre"][axis] - start[ref["name"]]["centre"][axis]) > more_than]
 
     def blocks(color: Any = None, size: str | None = None, start_area: str | None = None) -> list[Record]:
-        colors = None if color is None else set(
-            WARM if color == "warm" else COOL if color == "cool" else [color] if isinstance(color, str) else color)
+        words = [color] if isinstance(color, str) else list(color or [])
+        colors = None if color is None else {c for w in words for c in (WARM if w == "warm" else COOL if w == "cool"
+                                                                        else [w])}
         if size is not None and size not in SIZE_WORDS:
             raise PlanError(f"ValueError: size {size!r}: valid: {', '.join(SIZE_WORDS)}")
         if start_area is not None and start_area not in AREAS:
@@ -184,8 +185,10 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         if bad:
             failures.add(f"must not be in the {said(where)}: {', '.join(map(_short, bad))}", bad)
 
-    def require_stack(objs: Any) -> None:
+    def require_stack(objs: Any, place: Any = None) -> None:
         group = objs_of(objs)
+        if place is not None:
+            require_inside(group, place)
         names = {r["name"] for r in group}
         bottom = [r for r in group if r["level"] == 1]
         tower = bottom[:1]
