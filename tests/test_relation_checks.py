@@ -136,3 +136,14 @@ def test_every_check_is_bound_and_counted() -> None:
     assert set(CHECKS) <= set(env)
     run_code("require_on_table(blocks())\nrequire_stack(blocks())", env)
     assert failures.calls == 2 and failures.wrong == ("movable small blue block with obj_id 3",)
+
+
+def test_small_model_slips_are_read_kindly_or_refused_with_what_exists() -> None:
+    """``blocks(color="big")`` means the size; ``b.color`` reads the key; a pick of no block is refused,
+    since a relation over nothing tests nothing (the commonest slip: a zone's colour read as the blocks')."""
+    rows = [place(1, "zone", "orange"), block(2, "red", (0.3, -0.2, 0.02), size="big"), block(3, "blue", (0.3, 0.1, 0.02))]
+    env, _ = relation_env(rows)
+    assert [r["color"] for r in env["blocks"](color="big")] == ["red"]
+    assert run_code("c = [b.color for b in blocks()]", env)["c"] == ["red", "blue"]
+    with pytest.raises(PlanError, match=r"picks no block; the blocks here have the colours \['blue', 'red'\]"):
+        run_code("require_stack(blocks(color='orange'), zone('orange'))", env)

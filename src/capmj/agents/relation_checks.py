@@ -53,6 +53,16 @@ SELECTORS = ("blocks", "other_blocks", "blocks_beside", "zone", "bowl", "ball", 
 """The functions that pick objects and places."""
 
 
+class _Record(dict):  # type: ignore[type-arg]
+    """A record whose keys read as attributes too (``b.color``): small models write both."""
+
+    def __getattr__(self, key: str) -> Any:
+        try:
+            return self[key]
+        except KeyError:
+            raise AttributeError(f"an object has no key {key!r}; its keys are {list(self)}") from None
+
+
 @dataclass
 class Failures:
     """The relations that failed in one run of a check: a sentence and the objects each blames."""
@@ -83,7 +93,7 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
 
     ``start_rows``: the records of the scene the robot started from (for ``require_unmoved``; the
     scene itself when None)."""
-    rows = [dict(r) for r in rows]  # fresh: the check may mutate what it is given
+    rows = [_Record(r) for r in rows]  # fresh: the check may mutate what it is given
     by_name = {r["name"]: r for r in rows}
     start = {r["name"]: r for r in (start_rows if start_rows is not None else rows)}
     movable = [r for r in rows if r["kind"] not in ("zone", "bowl", "fixture")]
@@ -152,15 +162,23 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
 
     def blocks(color: Any = None, size: str | None = None, start_area: str | None = None) -> list[Record]:
         words = [color] if isinstance(color, str) else list(color or [])
+        if size is None and len(words) == 1 and words[0] in SIZE_WORDS:  # blocks(color="big"): a size, not a colour
+            size, words, color = words[0], [], None
         colors = None if color is None else {c for w in words for c in (WARM if w == "warm" else COOL if w == "cool"
                                                                         else [w])}
         if size is not None and size not in SIZE_WORDS:
             raise PlanError(f"ValueError: size {size!r}: valid: {', '.join(SIZE_WORDS)}")
         if start_area is not None and start_area not in AREAS:
             raise PlanError(f"ValueError: start_area {start_area!r}: valid: {', '.join(AREAS)}")
-        return [r for r in movable if r["kind"] == "block" and (colors is None or r["color"] in colors)
-                and (size is None or r["size"] == SIZE_WORDS[size])
-                and (start_area is None or r["start_area"] == start_area)]
+        every = [r for r in movable if r["kind"] == "block"]
+        found = [r for r in every if (colors is None or r["color"] in colors)
+                 and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
+        if not found and every and (colors is not None or size is not None or start_area is not None):
+            # an empty pick tests nothing: most often a place's colour read as the blocks' (the "orange zone")
+            raise PlanError(f"ValueError: blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block; "
+                            f"the blocks here have the colours {sorted({r['color'] for r in every})}, the sizes "
+                            f"{sorted({r['size'] for r in every})} and started in {sorted({r['start_area'] for r in every})}")
+        return found
 
     def other_blocks(objs: Any) -> list[Record]:
         names = {r["name"] for r in objs_of(objs)}
