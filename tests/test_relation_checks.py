@@ -138,12 +138,38 @@ def test_every_check_is_bound_and_counted() -> None:
     assert failures.calls == 2 and failures.wrong == ("movable small blue block with obj_id 3",)
 
 
-def test_small_model_slips_are_read_kindly_or_refused_with_what_exists() -> None:
-    """``blocks(color="big")`` means the size; ``b.color`` reads the key; a pick of no block is refused,
-    since a relation over nothing tests nothing (the commonest slip: a zone's colour read as the blocks')."""
+def test_small_model_slips_are_read_kindly_and_empty_picks_noted() -> None:
+    """``blocks(color="big")`` means the size; ``b.color`` reads the key; a pick of no block is noted for
+    the repair request (a relation over nothing holds; the commonest slip: a zone's colour read as the blocks')."""
     rows = [place(1, "zone", "orange"), block(2, "red", (0.3, -0.2, 0.02), size="big"), block(3, "blue", (0.3, 0.1, 0.02))]
     env, _ = relation_env(rows)
     assert [r["color"] for r in env["blocks"](color="big")] == ["red"]
     assert run_code("c = [b.color for b in blocks()]", env)["c"] == ["red", "blue"]
-    with pytest.raises(PlanError, match=r"picks no block; the blocks here have the colours \['blue', 'red'\]"):
-        run_code("require_stack(blocks(color='orange'), zone('orange'))", env)
+    env, failures = relation_env(rows)
+    run_code("require_stack(blocks(color='orange'), zone('orange'))", env)
+    assert not failures.items and "picks no block: the blocks here have the colours ['blue', 'red']" in failures.empty_picks[0]
+
+
+@pytest.mark.parametrize(("code", "why"), [
+    ("require_count(blocks(color='red'), zone('green'), 2)", "requires 2 of 1 objects"),
+    ("require_layers(blocks(), [2, 2])", "layers of [2, 2] of 2 objects"),
+    ("require_inside(blocks(), zone('green'))\nrequire_outside(blocks(color='red'), zone('green'))", "both in and out"),
+    ("require_inside(blocks(), zone('green'))\nrequire_inside(blocks(color='red'), bowl('red'))", "two different places"),
+    ("require_stack(blocks())\nrequire_on_table(blocks())", "one tower and all on the table"),
+    ("require_stack(blocks())\nrequire_layers(blocks(), [1, 1])\nrequire_layers(blocks(), [2])", "layers of several"),
+])
+def test_calls_no_scene_can_pass_together_are_found(code: str, why: str) -> None:
+    rows = [place(1, "zone", "green"), place(4, "bowl", "red"), *tower(["red", "blue"])]
+    env, failures = relation_env(rows)
+    run_code(code, env)
+    assert why in (failures.impossible() or "")
+
+
+def test_calls_a_scene_can_pass_together_are_not_impossible() -> None:
+    rows = [place(1, "zone", "green"), place(4, "bowl", "red"), *tower(["red", "blue"])]
+    env, failures = relation_env(rows)
+    run_code("require_inside(blocks(), zones())\nrequire_inside(blocks(color='red'), zone('green'))\n"
+             "require_stack(blocks(), zone('green'))\nrequire_layers(blocks(), [1, 1])\nrequire_on_table(blocks(color='red'))\n"
+             "require_count(blocks(), zone('green'), 2)\nrequire_outside(blocks(), bowl('red'))\n"
+             "require_inside(blocks(), 'top left')", env)
+    assert failures.impossible() is None

@@ -16,7 +16,7 @@ from llm_stub_server import StubLLMServer, prompt_text
 from capmj.agents.prompt_files import load_prompt
 from capmj.agents.relation_checks import CHECKS
 from capmj.agents.reporter import make_reporter
-from capmj.agents.reporter_relations import BLIND, HOLDS_AT_START, RelationsReporter
+from capmj.agents.reporter_relations import BLIND, HOLDS_AT_START, IMPOSSIBLE, RelationsReporter
 from capmj.bench.cli import main
 
 SEED = 10001
@@ -107,3 +107,13 @@ def test_the_prompt_examples_run_and_relations_is_a_text_prompt() -> None:
         called = {n.func.id for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
         assert called & set(CHECKS), body
     assert isinstance(make_reporter("text", None, "relations"), RelationsReporter)
+
+
+def test_calls_no_scene_can_pass_are_repaired_then_doubted(server: StubLLMServer, tmp_path: Path) -> None:
+    """Two of a colour of which the scene has one: "not achieved" of every state, yet naming objects;
+    the repair request says so, and repeated, the verdict is low-confidence (``impossible_check``)."""
+    server.respond_with(lambda request: code("for b in bowls():\n    require_count(blocks(color=b['color']), b, 2)"))
+    judged = judge(tmp_path, server, "oracle,displaced")
+    assert IMPOSSIBLE in prompt_text(server.requests[1])
+    for r in judged:
+        assert (r["verdict"], r["source"], r["low_confidence"]) == (False, "repair", "impossible_check"), r

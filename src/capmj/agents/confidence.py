@@ -47,6 +47,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "copies_example": "its reason is the prompt's own example, word for word",
     "holds_at_start": "its check also says the goal holds in the scene the robot started from",
     "blind_check": "its check reads no measured key, or compares one only with a value no record can have",
+    "impossible_check": "its check asks for relations no scene can satisfy together (relations prompt)",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 

@@ -71,8 +71,48 @@ class Failures:
     calls: int = 0
     """How many ``require_*`` calls ran (a check that makes none tests nothing)."""
 
+    empty_picks: list[str] = field(default_factory=list)
+    """``blocks(...)`` calls that picked no block, as sentences (a relation over nothing always holds)."""
+    demands: list[tuple[str, frozenset[str], Any]] = field(default_factory=list)
+    """What each call asked for, ``(relation, objects, detail)``: read by :meth:`impossible`."""
+
     def add(self, sentence: str, names: Sequence[str]) -> None:
         self.items.append((sentence, tuple(names)))
+
+    def impossible(self) -> str | None:
+        """Why no scene could pass every call (a sentence for the repair request), or None.
+
+        The mirror image of a check that holds at the start: one that no arrangement satisfies
+        says "not achieved" of every state, and names objects, so the careful loop would act on it.
+        Found without any task knowledge: a count above the objects counted, layers that do not add
+        up, an object required in two different zones/bowls or both in and out of one, two objects
+        of one required tower also required on the table, a tower required to be layered."""
+        inside: dict[str, list[frozenset[str]]] = {}
+        outside: dict[str, list[frozenset[str]]] = {}
+        stacks, tables, layers = [], [], []
+        for relation, names, detail in self.demands:
+            if relation == "count" and not 0 <= detail <= len(names):
+                return f"it requires {detail} of {len(names)} objects in a place"
+            if relation == "layers" and (sum(detail) != len(names) or min(detail, default=0) < 1):
+                return f"it requires layers of {list(detail)} of {len(names)} objects"
+            for name in names:
+                {"inside": inside, "outside": outside}.get(relation, {}).setdefault(name, []).append(detail)
+            if relation == "stack" and len(names) > 1:
+                stacks.append(names)
+            tables += [names] if relation == "table" else []
+            layers += [(names, detail)] if relation == "layers" else []
+        for name, places in inside.items():
+            if any(p <= q for p in places for q in outside.get(name, [])):
+                return f"it requires {_short(name)} both in and out of the same place"
+            containers = [p for p in places if not p & set(AREAS)]
+            if any(not p & q for p in containers for q in containers):
+                return f"it requires {_short(name)} in two different places at once"
+        for tower in stacks:
+            if any(len(tower & t) > 1 for t in tables):
+                return "it requires the same objects in one tower and all on the table"
+            if any(tower == group and max(counts) > 1 for group, counts in layers):
+                return "it requires the same objects in one tower and in layers of several"
+        return None
 
     @property
     def wrong(self) -> tuple[str, ...]:
@@ -174,10 +214,12 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         found = [r for r in every if (colors is None or r["color"] in colors)
                  and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
         if not found and every and (colors is not None or size is not None or start_area is not None):
-            # an empty pick tests nothing: most often a place's colour read as the blocks' (the "orange zone")
-            raise PlanError(f"ValueError: blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block; "
-                            f"the blocks here have the colours {sorted({r['color'] for r in every})}, the sizes "
-                            f"{sorted({r['size'] for r in every})} and started in {sorted({r['start_area'] for r in every})}")
+            # legitimate in a loop over bowls (a distractor's colour), but most often a place's colour read as
+            # the blocks' (the "orange zone"): kept for the repair request of a check that tests nothing
+            failures.empty_picks.append(
+                f"blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block: the blocks here "
+                f"have the colours {sorted({r['color'] for r in every})}, the sizes {sorted({r['size'] for r in every})} "
+                f"and started in {sorted({r['start_area'] for r in every})}")
         return found
 
     def other_blocks(objs: Any) -> list[Record]:
@@ -191,14 +233,19 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         run.__name__ = name
         return run
 
+    def names_of(group: Sequence[Record]) -> frozenset[str]:
+        return frozenset(r["name"] for r in group)
+
     def require_inside(objs: Any, place: Any) -> None:
         where = place_of(place)
+        failures.demands.append(("inside", names_of(objs_of(objs)), frozenset(where)))
         bad = [r["name"] for r in objs_of(objs) if not is_in(r, where)]
         if bad:
             failures.add(f"not in the {said(where)}: {', '.join(map(_short, bad))}", bad)
 
     def require_outside(objs: Any, place: Any) -> None:
         where = place_of(place)
+        failures.demands.append(("outside", names_of(objs_of(objs)), frozenset(where)))
         bad = [r["name"] for r in objs_of(objs) if is_in(r, where)]
         if bad:
             failures.add(f"must not be in the {said(where)}: {', '.join(map(_short, bad))}", bad)
@@ -207,6 +254,7 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         group = objs_of(objs)
         if place is not None:
             require_inside(group, place)
+        failures.demands.append(("stack", names_of(group), None))
         names = {r["name"] for r in group}
         bottom = [r for r in group if r["level"] == 1]
         tower = bottom[:1]
@@ -224,6 +272,7 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
 
     def require_layers(objs: Any, counts: Sequence[int]) -> None:
         group = objs_of(objs)
+        failures.demands.append(("layers", names_of(group), tuple(int(c) for c in counts)))
         have = [sum(1 for r in group if r["level"] == k + 1) for k in range(max(len(counts), 1))]
         bad = [r["name"] for r in group if r["tilted"] or r["level"] > len(counts)]
         if list(have) != list(counts) or bad:
@@ -231,6 +280,7 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
             failures.add(f"layers (bottom first) hold {have}, not {list(counts)}", bad or top)
 
     def require_on_table(objs: Any) -> None:
+        failures.demands.append(("table", names_of(objs_of(objs)), None))
         bad = [r["name"] for r in objs_of(objs) if r["level"] != 1 or r["tilted"]]
         if bad:
             failures.add(f"not upright on the table: {', '.join(map(_short, bad))}", bad)
@@ -283,6 +333,7 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
     def require_count(objs: Any, place: Any, n: int) -> None:
         where = place_of(place)
         group = objs_of(objs)
+        failures.demands.append(("count", names_of(group), int(n)))
         inside = [r["name"] for r in group if is_in(r, where)]
         if len(inside) != int(n):
             bad = inside if len(inside) > n else [r["name"] for r in group if r["name"] not in inside]

@@ -34,14 +34,14 @@ from typing import Any
 
 from capmj.agents.codeprep import undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
-from capmj.agents.relation_checks import CHECKS, SELECTORS, relation_env
+from capmj.agents.relation_checks import CHECKS, SELECTORS, Failures, relation_env
 from capmj.agents.reporter_goalcheck import GoalCheckReporter
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun
 from capmj.errors import PlanError, describe
 
-__all__ = ["BLIND", "HOLDS_AT_START", "PROMPT", "RelationsReporter"]
+__all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "PROMPT", "RelationsReporter"]
 
 PROMPT = "reporter_relations"
 """The prompt file (``prompts/reporter_relations.py``) and the LMP name in transcripts."""
@@ -52,6 +52,9 @@ BLIND = "it calls none of the require_... checks, so it tests nothing: call the 
 HOLDS_AT_START = ("every require_... call passes in the scene the robot started from, and no goal holds there: "
                   "require what the goal asks the robot to achieve (where the objects must be, stacks, layers ...)")
 """The problem the repair request states when the check finds nothing wrong with the start scene."""
+
+IMPOSSIBLE = "no arrangement of the objects could pass every require_... call, so it says \"not achieved\" of every scene"
+"""The start of the problem the repair request states when the calls contradict each other."""
 
 
 def calls_a_check(code: str) -> bool:
@@ -80,8 +83,9 @@ class RelationsReporter(GoalCheckReporter):
                 f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {' '.join(goal.split())}\n")
 
     def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]], scene: str,
-             label: str) -> CheckRun:
-        """Run prepared ``code`` on one scene's records: the verdict is that no required relation failed."""
+             label: str) -> tuple[CheckRun, Failures | None]:
+        """Run prepared ``code`` on one scene's records: the verdict is that no required relation failed,
+        and what its calls asked for (None when it failed to run)."""
         start = records(self._start_state, self._start) if self._start_state is not None else None
         env, failures = relation_env(rows, start)
         failed = "error" if label == "result" else f"{label} error"
@@ -91,10 +95,10 @@ class RelationsReporter(GoalCheckReporter):
         except PlanError as exc:
             problem = describe(exc)
             session.record(call, failed, problem)
-            return CheckRun(None, problem=problem, code=code)
+            return CheckRun(None, problem=problem, code=code), None
         verdict = not failures.items
         session.record(call, label, f"judge = {verdict!r}\nreason = {failures.reason!r}\nwrong = {list(failures.wrong)!r}")
-        return CheckRun(verdict, failures.reason, failures.wrong, None, code)
+        return CheckRun(verdict, failures.reason, failures.wrong, None, code), failures
 
     def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
         rows = self._records(session, ctx)
@@ -115,11 +119,19 @@ class RelationsReporter(GoalCheckReporter):
         if not calls_a_check(code):
             session.record(call, "blind", BLIND)
             return CheckRun(None, problem=BLIND, code=code)
-        run = self._run(session, call, code, rows, "", "result")
-        if run.problem is not None or self._start_state is None:
+        run, asked = self._run(session, call, code, rows, "", "result")
+        if run.problem is not None or asked is None:
             return run
-        at_start = self._run(session, call, code, records(self._start_state, self._start), " start", "start scene")
+        impossible = asked.impossible()
+        if impossible is not None:
+            problem = f"{IMPOSSIBLE}: {impossible}"
+            session.record(call, "impossible", problem)
+            return dataclasses.replace(run, doubt="impossible_check") if last else CheckRun(None, problem=problem,
+                                                                                            code=code)
+        if self._start_state is None:
+            return run
+        at_start, _ = self._run(session, call, code, records(self._start_state, self._start), " start", "start scene")
         if at_start.verdict is not True:
             return run
-        return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(
-            None, problem=HOLDS_AT_START, code=code)
+        problem = HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1])
+        return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(None, problem=problem, code=code)
