@@ -117,3 +117,22 @@ def test_calls_no_scene_can_pass_are_repaired_then_doubted(server: StubLLMServer
     assert IMPOSSIBLE in prompt_text(server.requests[1])
     for r in judged:
         assert (r["verdict"], r["source"], r["low_confidence"]) == (False, "repair", "impossible_check"), r
+
+
+def test_a_zone_colour_read_as_the_blocks_gets_a_repair_naming_the_colours_that_exist(server: StubLLMServer,
+                                                                                     tmp_path: Path) -> None:
+    """"Stack all blocks in the orange zone" read as the orange blocks: the pick is empty, so the
+    check holds at the start; the repair request says so and lists the blocks' real colours."""
+    def answer(request: dict[str, Any]) -> str:
+        text = prompt_text(request)
+        colour = text[text.rindex("# goal: "):].split(" zone")[0].split()[-1]
+        if "picks no block" in text:
+            return code(f"require_stack(blocks(), zone('{colour}'))")
+        return code(f"require_stack(blocks(color='{colour}'), zone('{colour}'))")
+
+    server.respond_with(answer)
+    judged = judge(tmp_path, server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
+    repair = prompt_text(server.requests[1])
+    assert HOLDS_AT_START in repair and "picks no block: the blocks here have the colours [" in repair
+    assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
+        (r["label"], "repair", "high") for r in judged]
