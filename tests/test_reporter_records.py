@@ -84,7 +84,7 @@ def test_the_prompt_documents_every_record_key_and_stops_before_another_example(
     documented += re.findall(r';\s+"(\w+)":', prompt.render(""))
     assert sorted(documented) == sorted(RECORD_KEYS)
     assert "\n\n# example goal" in prompt.stop
-    assert REPORTER_PROMPTS == ("thesis", "checked", "records", "goalcheck")
+    assert REPORTER_PROMPTS == ("thesis", "checked", "records", "goalcheck", "relations")
     assert isinstance(make_reporter("text", None, "records"), RecordsReporter)
 
 
