@@ -18,12 +18,17 @@ failed; ``wrong`` is the objects the failed calls name, so a "not achieved" alwa
 objects.  The prompt (``prompts/reporter_relations.py``) documents the calls and shows examples for
 goals that are none of the built-in tasks'.
 
-A check that calls no ``require_*`` tests nothing (``blind_check``); one that calls a name the
-prompt does not define gets the list of valid names (never a function written by
-``parse_function``: a made-up check would be a second, unmeasured reporter); one whose calls all
-pass on the start scene gets the ``HOLDS_AT_START`` repair.  After the one repair these keep
-their verdict but as low-confidence doubts, as in ``goalcheck``.  A check that still fails to run
-gets the ``checked`` question as ``direct`` (:class:`~capmj.agents.reporter_records.RecordsReporter`).
+Each answer gets one repair request when it tests nothing or cannot be right:
+
+* it calls no ``require_*`` (:data:`BLIND`), or a name the prompt does not define (the request
+  lists the valid names; never a function written by ``parse_function``: a made-up check would be
+  a second, unmeasured reporter).  Still so after the repair: the ``checked`` question as ``direct``
+  (:class:`~capmj.agents.reporter_records.RecordsReporter`);
+* its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
+  :meth:`~capmj.agents.relation_checks.Failures.impossible`): it would say "not achieved", naming
+  objects, of every state.  Still so after the repair: kept, low-confidence (``impossible_check``);
+* its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
+  block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``).
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from typing import Any
 from capmj.agents.codeprep import undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.relation_checks import CHECKS, SELECTORS, Failures, relation_env
-from capmj.agents.reporter_goalcheck import GoalCheckReporter
+from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun
@@ -67,7 +72,7 @@ def calls_a_check(code: str) -> bool:
                for n in ast.walk(tree))
 
 
-class RelationsReporter(GoalCheckReporter):
+class RelationsReporter(RecordsReporter):
     """``--reporter-prompt relations``: the goal as calls of pre-bound relation checks (see the module docstring)."""
 
     prompt = "relations"
