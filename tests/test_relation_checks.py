@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from capmj.agents.relation_checks import CHECKS, relation_env
+from capmj.agents.relation_checks import CHECKS, NAMES, relation_env
 from capmj.agents.sandbox import run_code
 from capmj.errors import PlanError
 
@@ -133,7 +133,7 @@ def test_bad_arguments_name_the_valid_choices(code: str, needle: str) -> None:
 
 def test_every_check_is_bound_and_counted() -> None:
     env, failures = relation_env([place(1, "zone", "green"), *tower(["red", "blue"])])
-    assert set(CHECKS) <= set(env)
+    assert tuple(env) == NAMES and set(CHECKS) <= set(env)
     run_code("require_on_table(blocks())\nrequire_stack(blocks())", env)
     assert failures.calls == 2 and failures.wrong == ("movable small blue block with obj_id 3",)
 

@@ -36,7 +36,7 @@ from capmj.sim.palette import COOL, WARM
 from capmj.tasks.predicates import CENTRE_TOL, CIRCLE_TOL, ROW_LINE_TOL, fit_circle
 from capmj.tasks.predicates.tolerances import MOVE_TOL
 
-__all__ = ["CHECKS", "SELECTORS", "Failures", "relation_env"]
+__all__ = ["CHECKS", "NAMES", "SELECTORS", "Failures", "relation_env"]
 
 Record = dict[str, Any]
 
@@ -51,6 +51,8 @@ CHECKS = ("require_inside", "require_outside", "require_stack", "require_layers"
 """The relation checks, in the order the prompt documents them."""
 SELECTORS = ("blocks", "other_blocks", "blocks_beside", "zone", "bowl", "ball", "zones", "bowls")
 """The functions that pick objects and places."""
+NAMES = ("objects", *SELECTORS, *CHECKS)
+"""Every name :func:`relation_env` binds: what a check may use besides Python's builtins."""
 
 
 class _Record(dict):  # type: ignore[type-arg]

@@ -39,7 +39,7 @@ from typing import Any
 
 from capmj.agents.codeprep import undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
-from capmj.agents.relation_checks import CHECKS, SELECTORS, Failures, relation_env
+from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
@@ -87,11 +87,10 @@ class RelationsReporter(RecordsReporter):
         return (f"# Write the corrected complete check for the same goal: only calls of {', '.join(CHECKS)} "
                 f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {' '.join(goal.split())}\n")
 
-    def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]], scene: str,
-             label: str) -> tuple[CheckRun, Failures | None]:
-        """Run prepared ``code`` on one scene's records: the verdict is that no required relation failed,
-        and what its calls asked for (None when it failed to run)."""
-        start = records(self._start_state, self._start) if self._start_state is not None else None
+    def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]],
+             start: list[dict[str, Any]] | None, scene: str, label: str) -> tuple[CheckRun, Failures | None]:
+        """Run prepared ``code`` on one scene's records (``start``: the start scene's, for ``require_unmoved``):
+        the verdict is that no required relation failed, and what its calls asked for (None when it failed to run)."""
         env, failures = relation_env(rows, start)
         failed = "error" if label == "result" else f"{label} error"
         try:
@@ -107,7 +106,8 @@ class RelationsReporter(RecordsReporter):
 
     def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
         rows = self._records(session, ctx)
-        known = set(relation_env(rows)[0])
+        start = records(self._start_state, self._start) if self._start_state is not None else None
+        known = set(NAMES)
         code = ""
         try:
             code = extract_code(text)
@@ -124,7 +124,7 @@ class RelationsReporter(RecordsReporter):
         if not calls_a_check(code):
             session.record(call, "blind", BLIND)
             return CheckRun(None, problem=BLIND, code=code)
-        run, asked = self._run(session, call, code, rows, "", "result")
+        run, asked = self._run(session, call, code, rows, start, "", "result")
         if run.problem is not None or asked is None:
             return run
         impossible = asked.impossible()
@@ -133,9 +133,9 @@ class RelationsReporter(RecordsReporter):
             session.record(call, "impossible", problem)
             return dataclasses.replace(run, doubt="impossible_check") if last else CheckRun(None, problem=problem,
                                                                                             code=code)
-        if self._start_state is None:
+        if start is None:
             return run
-        at_start, _ = self._run(session, call, code, records(self._start_state, self._start), " start", "start scene")
+        at_start, _ = self._run(session, call, code, start, start, " start", "start scene")
         if at_start.verdict is not True:
             return run
         problem = HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1])
