@@ -239,16 +239,16 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         return frozenset(r["name"] for r in group)
 
     def require_inside(objs: Any, place: Any) -> None:
-        where = place_of(place)
-        failures.demands.append(("inside", names_of(objs_of(objs)), frozenset(where)))
-        bad = [r["name"] for r in objs_of(objs) if not is_in(r, where)]
+        where, group = place_of(place), objs_of(objs)
+        failures.demands.append(("inside", names_of(group), frozenset(where)))
+        bad = [r["name"] for r in group if not is_in(r, where)]
         if bad:
             failures.add(f"not in the {said(where)}: {', '.join(map(_short, bad))}", bad)
 
     def require_outside(objs: Any, place: Any) -> None:
-        where = place_of(place)
-        failures.demands.append(("outside", names_of(objs_of(objs)), frozenset(where)))
-        bad = [r["name"] for r in objs_of(objs) if is_in(r, where)]
+        where, group = place_of(place), objs_of(objs)
+        failures.demands.append(("outside", names_of(group), frozenset(where)))
+        bad = [r["name"] for r in group if is_in(r, where)]
         if bad:
             failures.add(f"must not be in the {said(where)}: {', '.join(map(_short, bad))}", bad)
 
@@ -256,8 +256,8 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         group = objs_of(objs)
         if place is not None:
             require_inside(group, place)
-        failures.demands.append(("stack", names_of(group), None))
-        names = {r["name"] for r in group}
+        names = names_of(group)
+        failures.demands.append(("stack", names, None))
         bottom = [r for r in group if r["level"] == 1]
         tower = bottom[:1]
         while tower:
@@ -282,8 +282,9 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
             failures.add(f"layers (bottom first) hold {have}, not {list(counts)}", bad or top)
 
     def require_on_table(objs: Any) -> None:
-        failures.demands.append(("table", names_of(objs_of(objs)), None))
-        bad = [r["name"] for r in objs_of(objs) if r["level"] != 1 or r["tilted"]]
+        group = objs_of(objs)
+        failures.demands.append(("table", names_of(group), None))
+        bad = [r["name"] for r in group if r["level"] != 1 or r["tilted"]]
         if bad:
             failures.add(f"not upright on the table: {', '.join(map(_short, bad))}", bad)
 
