@@ -16,7 +16,8 @@
 # The checks (objs: a list of objects or one object):
 #   require_inside(objs, place)          every one of objs is in the place
 #   require_outside(objs, place)         none of objs is in the place
-#   require_stack(objs, place=None)      objs form one upright tower, one on top of the other (in the place)
+#   require_stack(objs, place=None)      objs form one upright tower, one on top of the other (in the place):
+#                                        a single column; a structure with several blocks in a layer is require_layers
 #   require_layers(objs, [n1, n2, ...])  n1 of objs on the table, n2 on top of them, ... and nothing higher
 #   require_on_table(objs)               every one of objs stands upright on the table, not on another block
 #   require_unmoved(objs)                objs are still where they started
@@ -32,6 +33,9 @@
 
 # goal: Put every block in one of the bowls.
 require_inside(blocks(), bowls())
+
+# goal: Move all blocks into the gray zone.
+require_inside(blocks(), zone("gray"))
 
 # goal: Stack the red and the blue blocks in the white zone.
 require_stack(blocks(color=["red", "blue"]), zone("white"))
@@ -64,6 +68,11 @@ require_alternating(ring)
 reds = blocks(color="red")
 require_count(reds, bowl("blue"), 2)
 require_outside(other_blocks(reds), bowl("blue"))
+
+# goal: Put the blocks of the colour that has the fewest blocks in the bowl.
+colors = [b["color"] for b in blocks()]
+fewest = min(colors, key=colors.count)
+require_inside(blocks(color=fewest), bowl())
 
 # goal: Stack the blocks that are more than 0.1 to the rear of the white block on top of it.
 white = blocks(color="white")

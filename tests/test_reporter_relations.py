@@ -119,20 +119,39 @@ def test_calls_no_scene_can_pass_are_repaired_then_doubted(server: StubLLMServer
         assert (r["verdict"], r["source"], r["low_confidence"]) == (False, "repair", "impossible_check"), r
 
 
-def test_a_zone_colour_read_as_the_blocks_gets_a_repair_naming_the_colours_that_exist(server: StubLLMServer,
-                                                                                     tmp_path: Path) -> None:
-    """"Stack all blocks in the orange zone" read as the orange blocks: the pick is empty, so the
-    check holds at the start; the repair request says so and lists the blocks' real colours."""
+def test_a_zone_colour_read_as_the_blocks_gets_a_repair_that_says_what_the_colour_names(server: StubLLMServer,
+                                                                                       tmp_path: Path) -> None:
+    """"Stack all blocks in the orange zone" read as the orange blocks: the goal says the colour only
+    of the zone, so the repair request says so; the repaired check follows the labels (high confidence)."""
     def answer(request: dict[str, Any]) -> str:
         text = prompt_text(request)
         colour = text[text.rindex("# goal: "):].split(" zone")[0].split()[-1]
-        if "picks no block" in text:
+        if "not the blocks" in text:
             return code(f"require_stack(blocks(), zone('{colour}'))")
         return code(f"require_stack(blocks(color='{colour}'), zone('{colour}'))")
 
     server.respond_with(answer)
     judged = judge(tmp_path, server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
     repair = prompt_text(server.requests[1])
-    assert HOLDS_AT_START in repair and "picks no block: the blocks here have the colours [" in repair
+    assert " zone, not the blocks: pick the blocks the goal means" in repair and HOLDS_AT_START not in repair
     assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
         (r["label"], "repair", "high") for r in judged]
+
+
+def test_a_pick_of_no_block_that_holds_at_start_gets_a_repair_naming_the_colours_that_exist(
+        server: StubLLMServer, tmp_path: Path) -> None:
+    """A colour computed from a place that no block has (the other zone): the pick is empty, the check holds at the
+    start, and the repair request lists the blocks' real colours."""
+    server.respond_with(lambda request: code("require_stack(blocks(color=zone('purple')['color']), zone('orange'))"))
+    judged = judge(tmp_path, server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
+    repair = prompt_text(server.requests[1])
+    assert HOLDS_AT_START in repair and "picks no block: the blocks here have the colours [" in repair
+    assert [(r["source"], r["low_confidence"]) for r in judged] == [("repair", "holds_at_start")] * len(judged)
+
+
+def test_a_count_the_goal_does_not_give_is_repaired_then_doubted(server: StubLLMServer, tmp_path: Path) -> None:
+    """A guessed count (the goal says no number): repaired, and repeated, kept low-confidence."""
+    server.respond_with(lambda request: code(MATCHING + "\nrequire_count(blocks(), bowls(), 2)"))
+    judged = judge(tmp_path, server, "oracle,displaced")
+    assert "the goal says no number 2" in prompt_text(server.requests[1])
+    assert [(r["source"], r["low_confidence"]) for r in judged] == [("repair", "ungrounded_literal")] * len(judged)

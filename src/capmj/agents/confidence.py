@@ -48,6 +48,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "holds_at_start": "its check also says the goal holds in the scene the robot started from",
     "blind_check": "its check reads no measured key, or compares one only with a value no record can have",
     "impossible_check": "its check asks for relations no scene can satisfy together (relations prompt)",
+    "ungrounded_literal": "its check picks a block colour or a count the goal does not give (relations prompt)",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 

@@ -113,7 +113,8 @@ class Failures:
             if any(len(tower & t) > 1 for t in tables):
                 return "it requires the same objects in one tower and all on the table"
             if any(tower == group and max(counts) > 1 for group, counts in layers):
-                return "it requires the same objects in one tower and in layers of several"
+                return ("it requires the same objects in one tower and in layers of several: a tower is a single column; "
+                        "a structure with several blocks in a layer is require_layers alone")
         return None
 
     @property

@@ -63,8 +63,8 @@ class GoalCheckReporter(RecordsReporter):
         return (f"# The objects of this scene. When the check runs, every record also has the measured keys above.\n"
                 f"{inventory}\n# goal: {' '.join(goal.split())}")
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
-        run = super()._check(session, call, text, ctx, last)
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, last: bool) -> CheckRun:
+        run = super()._check(session, call, text, ctx, goal, last)
         if run.problem is not None or self._start_state is None:
             return run
         start = records(self._start_state, self._start)

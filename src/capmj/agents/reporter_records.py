@@ -102,7 +102,7 @@ class RecordsReporter:
                                                             "seed": derived_seed(f"capmj-records-repair/{question}")})):
             call = session.next_call(self.prompt_file, goal)
             text = session.ask(call, messages, **sampling)
-            run = self._check(session, call, text, ctx, last=source == "repair")
+            run = self._check(session, call, text, ctx, goal, last=source == "repair")
             problem = run.problem
             if problem is None:
                 return Report(self.mode, run.verdict, run.reason, errors[-1] if errors else None, source, run.wrong,
@@ -119,8 +119,8 @@ class RecordsReporter:
                 f"keys {', '.join(RECORD_KEYS)}).\n# Set judge = True or False, reason = a short sentence, wrong = "
                 f"[full names of the movable objects that break the goal].\n# goal: {' '.join(goal.split())}\n")
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
-        """The answer's check run on the scene's records.
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, last: bool) -> CheckRun:
+        """The answer's check run on the scene's records (``goal``: the goal it checks).
 
         ``last``: no repair request follows, so a subclass keeps a doubtful verdict (``CheckRun.doubt``)
         instead of returning a problem."""

@@ -27,6 +27,9 @@ Each answer gets one repair request when it tests nothing or cannot be right:
 * its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
   :meth:`~capmj.agents.relation_checks.Failures.impossible`): it would say "not achieved", naming
   objects, of every state.  Still so after the repair: kept, low-confidence (``impossible_check``);
+* it picks a block colour or a count the goal does not give
+  (:func:`~capmj.agents.relation_grounding.ungrounded`: "the orange zone" read as the orange blocks,
+  a guessed colour and count).  Still so after the repair: kept, low-confidence (``ungrounded_literal``);
 * its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
   block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``).
 """
@@ -40,6 +43,7 @@ from typing import Any
 from capmj.agents.codeprep import undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
+from capmj.agents.relation_grounding import ungrounded
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
@@ -104,7 +108,7 @@ class RelationsReporter(RecordsReporter):
         session.record(call, label, f"judge = {verdict!r}\nreason = {failures.reason!r}\nwrong = {list(failures.wrong)!r}")
         return CheckRun(verdict, failures.reason, failures.wrong, None, code), failures
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, last: bool) -> CheckRun:
+    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, last: bool) -> CheckRun:
         rows = self._records(session, ctx)
         start = records(self._start_state, self._start) if self._start_state is not None else None
         known = set(NAMES)
@@ -133,6 +137,11 @@ class RelationsReporter(RecordsReporter):
             session.record(call, "impossible", problem)
             return dataclasses.replace(run, doubt="impossible_check") if last else CheckRun(None, problem=problem,
                                                                                             code=code)
+        guessed = ungrounded(code, goal, rows)
+        if guessed is not None:
+            session.record(call, "ungrounded", guessed)
+            return dataclasses.replace(run, doubt="ungrounded_literal") if last else CheckRun(None, problem=guessed,
+                                                                                              code=code)
         if start is None:
             return run
         at_start, _ = self._run(session, call, code, start, start, " start", "start scene")
