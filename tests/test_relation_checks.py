@@ -139,12 +139,13 @@ def test_every_check_is_bound_and_counted() -> None:
 
 
 def test_small_model_slips_are_read_kindly_and_empty_picks_noted() -> None:
-    """``blocks(color="big")`` means the size; ``b.color`` reads the key; a pick of no block is noted for
+    """``blocks(color="big")`` means the size; ``b.color`` reads the key; ``zone("zone")`` the only zone; a pick of no block is noted for
     the repair request (a relation over nothing holds; the commonest slip: a zone's colour read as the blocks')."""
     rows = [place(1, "zone", "orange"), block(2, "red", (0.3, -0.2, 0.02), size="big"), block(3, "blue", (0.3, 0.1, 0.02))]
     env, _ = relation_env(rows)
     assert [r["color"] for r in env["blocks"](color="big")] == ["red"]
     assert run_code("c = [b.color for b in blocks()]", env)["c"] == ["red", "blue"]
+    assert env["zone"]("zone")["color"] == "orange"  # the kind word where a colour goes: the only zone
     env, failures = relation_env(rows)
     run_code("require_stack(blocks(color='orange'), zone('orange'))", env)
     assert not failures.items and "picks no block: the blocks here have the colours ['blue', 'red']" in failures.empty_picks[0]

@@ -187,6 +187,8 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         """The one object of ``kind`` (of ``color`` when given)."""
         if isinstance(color, dict):
             color = color.get("color")
+        if color in (kind, f"{kind}s", f"the {kind}"):  # zone("zone"): the kind word, not a colour
+            color = None
         found = [r for r in rows if r["kind"] == kind and color in (None, r["color"])]
         if len(found) != 1:
             colors = sorted({r["color"] for r in rows if r["kind"] == kind})
