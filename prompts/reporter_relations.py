@@ -17,8 +17,7 @@
 #   require_inside(objs, place)          every one of objs is in the place
 #   require_outside(objs, place)         none of objs is in the place
 #   require_stack(objs, place=None)      objs form one upright tower, one on top of the other (in the place):
-#                                        a single column; a structure with several blocks in a layer (a wall, a
-#                                        pyramid, a cube) is require_layers, not require_stack
+#                                        a single column; a structure with several blocks in a layer is require_layers
 #   require_layers(objs, [n1, n2, ...])  n1 of objs on the table, n2 on top of them, ... and nothing higher
 #   require_on_table(objs)               every one of objs stands upright on the table, not on another block
 #   require_unmoved(objs)                objs are still where they started
