@@ -30,7 +30,7 @@ import re
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = ["ungrounded"]
+__all__ = ["goal_numbers", "ungrounded"]
 
 PLACE_NOUNS = ("zone", "zones", "bowl", "bowls", "area", "areas")
 """Nouns after which a colour word names a place, not blocks."""
@@ -82,9 +82,9 @@ def ungrounded(code: str, goal: str, rows: Iterable[dict[str, Any]]) -> str | No
     for call in _calls(tree, "blocks"):
         arg = _argument(call, 0, "color")
         for colour in _strings(arg) if arg is not None else []:
-            said = [i for i, w in enumerate(words) if w == colour.lower()]
             if colour.lower() in _NOT_COLOURS:
                 continue
+            said = [i for i, w in enumerate(words) if w == colour.lower()]
             if said and all(i + 1 < len(words) and words[i + 1] in PLACE_NOUNS for i in said):
                 noun = words[said[0] + 1]
                 return (f'blocks(color="{colour}") picks {colour} blocks, but in the goal "{colour}" names the '
