@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -135,7 +136,7 @@ def fill(goal: str) -> str:
     """The check of ``goal``: the first matching entry of :data:`CHECKS`, its blanks filled from the goal's words."""
     words = goal.rstrip(".").replace(",", "").split()
     for prefix, body in CHECKS.items():
-        if goal.startswith(prefix.split("{")[0]) and ("{c1}" not in prefix or "around the ball" in goal):
+        if re.match(re.sub(r"\\\{\w+\\\}", r"\\S+", re.escape(prefix)), goal):  # a {blank} is one word
             return body.format(**_blanks(goal, words)).strip()
     raise KeyError(goal)
 

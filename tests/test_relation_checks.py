@@ -141,8 +141,8 @@ def test_every_check_is_bound_and_counted() -> None:
 
 
 def test_small_model_slips_are_read_kindly_and_empty_picks_noted() -> None:
-    """``blocks(color="big")`` means the size; ``b.color`` reads the key; ``zone("zone")`` the only zone; a pick of no block is noted for
-    the repair request (a relation over nothing holds; the commonest slip: a zone's colour read as the blocks')."""
+    """``blocks(color="big")`` means the size; ``b.color`` reads the key; ``zone("zone")`` is the only zone;
+    a pick of no block is noted for the repair request (a relation over nothing holds)."""
     rows = [place(1, "zone", "orange"), block(2, "red", (0.3, -0.2, 0.02), size="big"), block(3, "blue", (0.3, 0.1, 0.02))]
     env, _ = relation_env(rows)
     assert [r["color"] for r in env["blocks"](color="big")] == ["red"]

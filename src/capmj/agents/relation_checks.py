@@ -220,8 +220,9 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         found = [r for r in every if (colors is None or r["color"] in colors)
                  and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
         if not found and every and (colors is not None or size is not None or start_area is not None):
-            # legitimate in a loop over bowls (a distractor's colour), but most often a place's colour read as
-            # the blocks' (the "orange zone"): kept for the repair request of a check that tests nothing
+            # legitimate in a loop over bowls (a distractor's colour), but also a place's colour read as the
+            # blocks' (a literal one is caught first by relation_grounding): kept for the repair request of a
+            # check that tests nothing
             failures.empty_picks.append(
                 f"blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block: the blocks here "
                 f"have the colours {sorted({r['color'] for r in every})}, the sizes {sorted({r['size'] for r in every})} "
