@@ -77,6 +77,7 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "blind_check": Report("text", False, "no", wrong=(block.name,), doubt="blind_check"),
         "impossible_check": Report("text", False, "no", wrong=(block.name,), doubt="impossible_check"),
         "ungrounded_literal": Report("text", False, "no", wrong=(block.name,), doubt="ungrounded_literal"),
+        "misses_a_relation": Report("text", True, "yes", doubt="misses_a_relation"),
     }
     for why, report in cases.items():
         a = assess(report, objects)

@@ -155,3 +155,19 @@ def test_a_count_the_goal_does_not_give_is_repaired_then_doubted(server: StubLLM
     judged = judge(tmp_path, server, "oracle,displaced")
     assert "the goal says no number 2" in prompt_text(server.requests[1])
     assert [(r["source"], r["low_confidence"]) for r in judged] == [("repair", "ungrounded_literal")] * len(judged)
+
+
+def test_a_relation_the_goal_names_and_the_check_leaves_out_is_repaired_then_doubted(server: StubLLMServer,
+                                                                                      tmp_path: Path) -> None:
+    """"Stack all blocks in the orange zone" checked as "inside" only: the repair request names the
+    stack; repeated, the verdict is kept low-confidence (``misses_a_relation``); added, it follows the labels."""
+    inside_only = "require_inside(blocks(), zone('orange'))"
+    server.respond_with(lambda request: code(inside_only))
+    judged = judge(tmp_path, server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
+    assert 'the goal says "stack", but no call asks for a stack' in prompt_text(server.requests[1])
+    assert [(r["source"], r["low_confidence"]) for r in judged] == [("repair", "misses_a_relation")] * len(judged)
+    server.respond_with(lambda request: code(inside_only + ("\nrequire_stack(blocks())" if "asks for a stack" in
+                                                            prompt_text(request) else "")))
+    judged = judge(tmp_path / "repaired", server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
+    assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
+        (r["label"], "repair", "high") for r in judged]

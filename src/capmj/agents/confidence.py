@@ -49,6 +49,7 @@ LOW_CONFIDENCE: dict[str, str] = {
     "blind_check": "its check reads no measured key, or compares one only with a value no record can have",
     "impossible_check": "its check asks for relations no scene can satisfy together (relations prompt)",
     "ungrounded_literal": "its check picks a block colour or a count the goal does not give (relations prompt)",
+    "misses_a_relation": "its check never asks for a relation the goal names (relations prompt)",
 }
 """Why a verdict is low-confidence (the key is recorded)."""
 

@@ -30,6 +30,9 @@ Each answer gets one repair request when it tests nothing or cannot be right:
 * it picks a block colour or a count the goal does not give
   (:func:`~capmj.agents.relation_grounding.ungrounded`: "the orange zone" read as the orange blocks,
   a guessed colour and count).  Still so after the repair: kept, low-confidence (``ungrounded_literal``);
+* it never asks for a relation the goal names (:func:`~capmj.agents.relation_coverage.uncovered`:
+  "stack" with no stack or layers call, "in the zone" with no place ...).  Still so after the
+  repair: kept, low-confidence (``misses_a_relation``);
 * its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
   block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``).
 """
@@ -43,6 +46,7 @@ from typing import Any
 from capmj.agents.codeprep import undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
+from capmj.agents.relation_coverage import uncovered
 from capmj.agents.relation_grounding import ungrounded
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
@@ -142,10 +146,13 @@ class RelationsReporter(RecordsReporter):
             session.record(call, "ungrounded", guessed)
             return dataclasses.replace(run, doubt="ungrounded_literal") if last else CheckRun(None, problem=guessed,
                                                                                               code=code)
-        if start is None:
-            return run
-        at_start, _ = self._run(session, call, code, start, start, " start", "start scene")
-        if at_start.verdict is not True:
-            return run
-        problem = HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1])
-        return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(None, problem=problem, code=code)
+        if start is not None and self._run(session, call, code, start, start, " start", "start scene")[0].verdict:
+            problem = HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1])
+            return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(None, problem=problem,
+                                                                                          code=code)
+        unasked = uncovered(code, goal)
+        if unasked is not None:
+            session.record(call, "uncovered", unasked)
+            return dataclasses.replace(run, doubt="misses_a_relation") if last else CheckRun(None, problem=unasked,
+                                                                                             code=code)
+        return run

@@ -1,0 +1,62 @@
+"""Relations a goal names that a relation check never asks for: the other half of a partial check.
+
+Why, from the shared 1.5B model's ``relations`` answers (judge set and closed loops, 20 tasks × 5
+test seeds): the commonest wrong check that no other repair catches writes one relation of two.
+"Stack all blocks in the orange zone" became ``require_inside(blocks(), zone("orange"))`` (no
+stack), "Stack blocks of the same color that has the largest quantity in the zone" became
+``require_inside(blocks(color=largest), zone())`` (the loop's only high-confidence false
+"achieved" on seed 10003), a circle of alternating colours became ``require_circle`` alone.  Such a
+check says "achieved" of every state that keeps the relation it wrote and breaks the one it left
+out (an unstacked tower, a ring of swapped colours).
+
+The rule is a reader's, with no task knowledge: a goal that says "stack" asks for a stack or
+layers, "circle" or "ring" for a circle, "alternat..." for alternating colours, and "in/on/into the
+... zone/bowl" for where the objects must be.  A check that calls none of the matching
+``require_*`` misses a relation the goal names.  The words are the relations' own names in the
+prompt, not any task's goal.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+
+__all__ = ["COVERAGE", "uncovered"]
+
+PLACED = ("require_inside", "require_outside", "require_count")
+"""Checks that say where objects must (not) be; ``require_stack(objs, place)`` does too."""
+
+COVERAGE: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    (r"\bstack", "a stack", ("require_stack", "require_layers")),
+    (r"\b(?:circle|ring)s?\b", "a circle", ("require_circle",)),
+    (r"\balternat", "alternating colours", ("require_alternating",)),
+    (r"\b(?:in|on|into|onto)\s+(?:the|a|an|each|every)\s+(?:[a-z]+\s+){0,2}?(?:zone|bowl)s?\b",
+     "where the objects must be (a zone or bowl)", PLACED),
+)
+"""(goal pattern, what it asks for, the checks any one of which asks for it)."""
+
+
+def _asked(tree: ast.AST) -> set[str]:
+    """The ``require_*`` names the code calls; ``require_stack`` with a place counts as placing too."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            names.add(node.func.id)
+            if node.func.id == "require_stack" and (len(node.args) > 1 or any(k.arg == "place" for k in node.keywords)):
+                names.add(PLACED[0])
+    return names
+
+
+def uncovered(code: str, goal: str) -> str | None:
+    """Which relation the goal names and ``code`` never asks for (a sentence for the repair request), or None."""
+    try:
+        tree = ast.parse(code)
+    except SyntaxError:
+        return None  # the sandbox reports it
+    asked, text = _asked(tree), goal.lower()
+    for pattern, relation, checks in COVERAGE:
+        found = re.search(pattern, text)
+        if found and not asked & set(checks):
+            return (f'the goal says "{found.group(0)}", but no call asks for {relation}: add one of '
+                    f"{', '.join(checks)} to the calls the goal needs (keep the others)")
+    return None
