@@ -103,6 +103,8 @@ def test_circles_rows_unmoved_and_distinct_colours() -> None:
                                                       0.1 * math.sin(i * math.pi / 3), 0.02)) for i in range(6)]
     ball = {**place(9, "ball", "white", (0.5, 0.0, 0.02)), "kind": "ball"}
     assert run([*ring, ball], "require_circle(blocks(), around=ball())\nrequire_alternating(blocks())")[0]
+    assert run([*ring, ball], "require_alternating(blocks(), around=ball())")[0]  # ordered around the ball
+    assert not run([*ring[:4], {**ring[4], "color": "red"}, ring[5], ball], "require_alternating(blocks(), around=ball())")[0]
     bent = [*ring[:5], {**ring[5], "centre": [0.5, -0.02, 0.02]}]
     ok, wrong, _ = run(bent, "require_circle(blocks())")
     assert not ok and wrong == [ring[5]["name"]]

@@ -323,12 +323,13 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         if off.max() > ROW_LINE_TOL:
             failures.add("the centres are not on one straight line", [group[int(np.argmax(off))]["name"]])
 
-    def require_alternating(objs: Any, first_color: str | None = None) -> None:
+    def require_alternating(objs: Any, first_color: str | None = None, around: Any = None) -> None:
         group = objs_of(objs)
         if len({r["level"] for r in group}) == len(group):  # a stack: bottom first
             order, cyclic = sorted(group, key=lambda r: r["level"]), False
-        else:  # a ring or a group on the table: around their mean centre
-            mid = np.mean([r["centre"][:2] for r in group], axis=0)
+        else:  # a ring or a group on the table: around the object `around` (as in require_circle), else their centre
+            mid = (objs_of(around, "around")[0]["centre"][:2] if around is not None
+                   else np.mean([r["centre"][:2] for r in group], axis=0))
             order = sorted(group, key=lambda r: math.atan2(r["centre"][1] - mid[1], r["centre"][0] - mid[0]))
             cyclic = True
         pairs = list(zip(order, order[1:] + (order[:1] if cyclic and len(order) > 2 else [])))
