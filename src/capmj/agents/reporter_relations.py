@@ -30,11 +30,13 @@ Each answer gets one repair request when it tests nothing or cannot be right:
 * it picks a block colour or a count the goal does not give
   (:func:`~capmj.agents.relation_grounding.ungrounded`: "the orange zone" read as the orange blocks,
   a guessed colour and count).  Still so after the repair: kept, low-confidence (``ungrounded_literal``);
+* its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
+  block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``);
 * it never asks for a relation the goal names (:func:`~capmj.agents.relation_coverage.uncovered`:
   "stack" with no stack or layers call, "in the zone" with no place ...).  Still so after the
-  repair: kept, low-confidence (``misses_a_relation``);
-* its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
-  block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``).
+  repair: kept, low-confidence (``misses_a_relation``).
+
+The checks run in this order, and the first that finds a problem decides.
 """
 
 from __future__ import annotations
@@ -135,24 +137,24 @@ class RelationsReporter(RecordsReporter):
         run, asked = self._run(session, call, code, rows, start, "", "result")
         if run.problem is not None or asked is None:
             return run
+
+        def doubted(key: str, problem: str) -> CheckRun:
+            """A check that cannot be right: its problem for the repair request, or after the repair its
+            verdict, kept low-confidence (``key``)."""
+            return dataclasses.replace(run, doubt=key) if last else CheckRun(None, problem=problem, code=code)
+
         impossible = asked.impossible()
         if impossible is not None:
-            problem = f"{IMPOSSIBLE}: {impossible}"
-            session.record(call, "impossible", problem)
-            return dataclasses.replace(run, doubt="impossible_check") if last else CheckRun(None, problem=problem,
-                                                                                            code=code)
+            session.record(call, "impossible", f"{IMPOSSIBLE}: {impossible}")
+            return doubted("impossible_check", f"{IMPOSSIBLE}: {impossible}")
         guessed = ungrounded(code, goal, rows)
         if guessed is not None:
             session.record(call, "ungrounded", guessed)
-            return dataclasses.replace(run, doubt="ungrounded_literal") if last else CheckRun(None, problem=guessed,
-                                                                                              code=code)
+            return doubted("ungrounded_literal", guessed)
         if start is not None and self._run(session, call, code, start, start, " start", "start scene")[0].verdict:
-            problem = HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1])
-            return dataclasses.replace(run, doubt="holds_at_start") if last else CheckRun(None, problem=problem,
-                                                                                          code=code)
+            return doubted("holds_at_start", HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1]))
         unasked = uncovered(code, goal)
         if unasked is not None:
             session.record(call, "uncovered", unasked)
-            return dataclasses.replace(run, doubt="misses_a_relation") if last else CheckRun(None, problem=unasked,
-                                                                                             code=code)
+            return doubted("misses_a_relation", unasked)
         return run
