@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 import builtins
 import re
+from collections.abc import Iterator
 
 from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES
 from capmj.agents.sandbox.checks import bound_names
@@ -25,6 +26,7 @@ __all__ = [
     "SANDBOX_GLOBALS",
     "bound_names",
     "function_defs",
+    "named_calls",
     "strip_benign_imports",
     "undefined_calls",
 ]
@@ -63,6 +65,13 @@ RESERVED: dict[str, str] = {
 where it is not available (API functions absent from a helper's env are added by the session)."""
 
 
+def named_calls(tree: ast.AST, name: str | None = None) -> Iterator[tuple[str, ast.Call]]:
+    """The calls of a bare name in ``tree`` (only those of ``name`` when given), as ``(name, call)``."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and name in (None, node.func.id):
+            yield node.func.id, node
+
+
 def undefined_calls(code: str, known: set[str] | frozenset[str]) -> list[tuple[str, int, str]]:
     """Functions ``code`` calls by a bare name that neither ``known`` nor the code itself binds.
 
@@ -78,9 +87,7 @@ def undefined_calls(code: str, known: set[str] | frozenset[str]) -> list[tuple[s
     lines = code.splitlines()
     statements = [n for n in ast.walk(tree) if isinstance(n, ast.stmt)]
     found: dict[str, tuple[str, int, str]] = {}
-    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)]
-    for call in sorted(calls, key=lambda c: (c.lineno, c.col_offset)):
-        name = call.func.id  # type: ignore[attr-defined]
+    for name, call in sorted(named_calls(tree), key=lambda nc: (nc[1].lineno, nc[1].col_offset)):
         if name in bound or name in found or name in FORBIDDEN_NAMES or name.startswith("_"):
             continue
         if hasattr(builtins, name):

@@ -21,6 +21,8 @@ from __future__ import annotations
 import ast
 import re
 
+from capmj.agents.codeprep import named_calls
+
 __all__ = ["COVERAGE", "uncovered"]
 
 PLACED = ("require_inside", "require_outside", "require_count")
@@ -39,11 +41,10 @@ COVERAGE: tuple[tuple[str, str, tuple[str, ...]], ...] = (
 def _asked(tree: ast.AST) -> set[str]:
     """The ``require_*`` names the code calls; ``require_stack`` with a place counts as placing too."""
     names: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
-            names.add(node.func.id)
-            if node.func.id == "require_stack" and (len(node.args) > 1 or any(k.arg == "place" for k in node.keywords)):
-                names.add(PLACED[0])
+    for name, call in named_calls(tree):
+        names.add(name)
+        if name == "require_stack" and (len(call.args) > 1 or any(k.arg == "place" for k in call.keywords)):
+            names.add(PLACED[0])
     return names
 
 

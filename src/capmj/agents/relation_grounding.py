@@ -30,6 +30,8 @@ import re
 from collections.abc import Iterable
 from typing import Any
 
+from capmj.agents.codeprep import named_calls
+
 __all__ = ["goal_numbers", "ungrounded"]
 
 PLACE_NOUNS = ("zone", "zones", "bowl", "bowls", "area", "areas")
@@ -47,10 +49,6 @@ def _strings(node: ast.AST) -> list[str]:
     if isinstance(node, (ast.List, ast.Tuple)):
         return [e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
     return []
-
-
-def _calls(tree: ast.AST, name: str) -> Iterable[ast.Call]:
-    return (n for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == name)
 
 
 def _argument(call: ast.Call, position: int, keyword: str) -> ast.AST | None:
@@ -79,7 +77,7 @@ def ungrounded(code: str, goal: str, rows: Iterable[dict[str, Any]]) -> str | No
     rows = list(rows)
     block_colours = {r["color"] for r in rows if r.get("kind") == "block"}
     place_colours = {r["color"] for r in rows if r.get("kind") in ("zone", "bowl")}
-    for call in _calls(tree, "blocks"):
+    for _, call in named_calls(tree, "blocks"):
         arg = _argument(call, 0, "color")
         for colour in _strings(arg) if arg is not None else []:
             if colour.lower() in _NOT_COLOURS:
@@ -94,7 +92,7 @@ def ungrounded(code: str, goal: str, rows: Iterable[dict[str, Any]]) -> str | No
                         "when the goal means a colour chosen by a property (the same colour as a place, the commonest "
                         'colour ...), compute it from the objects, e.g. from [b["color"] for b in blocks()]')
     numbers = goal_numbers(goal)
-    for call in _calls(tree, "require_count"):
+    for _, call in named_calls(tree, "require_count"):
         n = _argument(call, 2, "n")
         if isinstance(n, ast.Constant) and isinstance(n.value, int) and n.value not in numbers:
             return (f"require_count(..., {n.value}) asks for {n.value} objects, but the goal says no number "

@@ -45,7 +45,7 @@ import ast
 import dataclasses
 from typing import Any
 
-from capmj.agents.codeprep import undefined_calls
+from capmj.agents.codeprep import named_calls, undefined_calls
 from capmj.agents.lmp import LMPCall, LMPSession
 from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
 from capmj.agents.relation_coverage import uncovered
@@ -78,8 +78,7 @@ def calls_a_check(code: str) -> bool:
         tree = ast.parse(code)
     except SyntaxError:
         return True  # the sandbox reports it
-    return any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id in CHECKS
-               for n in ast.walk(tree))
+    return any(name in CHECKS for name, _ in named_calls(tree))
 
 
 class RelationsReporter(RecordsReporter):
@@ -138,23 +137,23 @@ class RelationsReporter(RecordsReporter):
         if run.problem is not None or asked is None:
             return run
 
-        def doubted(key: str, problem: str) -> CheckRun:
+        def doubted(key: str, problem: str, label: str | None) -> CheckRun:
             """A check that cannot be right: its problem for the repair request, or after the repair its
-            verdict, kept low-confidence (``key``)."""
+            verdict, kept low-confidence (``key``); ``label``: the transcript entry (None: its run's says it)."""
+            if label is not None:
+                session.record(call, label, problem)
             return dataclasses.replace(run, doubt=key) if last else CheckRun(None, problem=problem, code=code)
 
         impossible = asked.impossible()
         if impossible is not None:
-            session.record(call, "impossible", f"{IMPOSSIBLE}: {impossible}")
-            return doubted("impossible_check", f"{IMPOSSIBLE}: {impossible}")
+            return doubted("impossible_check", f"{IMPOSSIBLE}: {impossible}", "impossible")
         guessed = ungrounded(code, goal, rows)
         if guessed is not None:
-            session.record(call, "ungrounded", guessed)
-            return doubted("ungrounded_literal", guessed)
+            return doubted("ungrounded_literal", guessed, "ungrounded")
         if start is not None and self._run(session, call, code, start, start, " start", "start scene")[0].verdict:
-            return doubted("holds_at_start", HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1]))
+            return doubted("holds_at_start", HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1]),
+                           None)
         unasked = uncovered(code, goal)
         if unasked is not None:
-            session.record(call, "uncovered", unasked)
-            return doubted("misses_a_relation", unasked)
+            return doubted("misses_a_relation", unasked, "uncovered")
         return run
