@@ -120,8 +120,9 @@ def test_circles_rows_unmoved_and_distinct_colours() -> None:
 
 
 @pytest.mark.parametrize(("code", "needle"), [
-    ("require_inside(blocks(), zone('purple'))", "the zones here are ['green']: the only zone is the green one, "
-                                                 "zone() picks it"),
+    # a colour some object has may be a loop over colours: not read as the only zone
+    ("require_inside(blocks(), zone('red'))", "the zones here are ['green']: the only zone is the green one, "
+                                              "zone() picks it"),
     ("require_inside(blocks(), bowl('purple'))", "the bowls here are []: loop over bowls()"),
     ("require_inside(blocks(), 'the table')", "is not a place"),
     ("blocks(size='huge')", "valid: big, bigger"),
@@ -150,6 +151,9 @@ def test_small_model_slips_are_read_kindly_and_empty_picks_noted() -> None:
     assert [r["color"] for r in env["blocks"](color="big")] == ["red"]
     assert run_code("c = [b.color for b in blocks()]", env)["c"] == ["red", "blue"]
     assert env["zone"]("zone")["color"] == "orange"  # the kind word where a colour goes: the only zone
+    assert env["zone"]("purple")["color"] == "orange"  # a colour nothing here has (an example's): the only zone
+    with pytest.raises(PlanError, match="there is no purple bowl"):
+        env["bowl"]("purple")  # no bowl at all: nothing to read it as
     env, failures = relation_env(rows)
     run_code("require_stack(blocks(color='orange'), zone('orange'))", env)
     assert not failures.items and "picks no block: the blocks here have the colours ['blue', 'red']" in failures.empty_picks[0]

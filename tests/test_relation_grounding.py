@@ -21,6 +21,9 @@ ONE_COLOUR = [{"kind": "block", "color": "purple"}] * 8 + [{"kind": "zone", "col
      'the goal names no colour "green"'),
     ('for b in blocks("red"):\n    require_outside(b, bowl("blue"))', "Put the blocks in bowls of other colours.",
      'the goal names no colour "red"'),
+    # a list that leaves a colour of the scene out still guesses
+    ('require_alternating(blocks(color=["blue", "green"]), first_color="blue")',
+     "Stack the blocks with alternate colours, starting with blue.", 'the goal names no colour "green"'),
     ("require_count(blocks(), zone(), 3)", "Put the most blocks you can in the zone.", "the goal says no number 3"),
     ("require_count(blocks(), zone(), n=5)", "Put two blocks in the zone.", "the goal says no number 5"),
 ])
@@ -39,6 +42,9 @@ def test_a_literal_the_goal_does_not_give_is_named(code: str, goal: str, says: s
     ('for z in zones():\n    require_inside(blocks(color=z["color"]), z)', "Put each block in its zone.", MIXED),
     # the only colour the blocks have: picking it picks them all
     ('require_layers(blocks(color="purple"), [4, 4])', "Build a cube of 8 blocks of one colour.", ONE_COLOUR),
+    # a list of every colour the blocks have: all blocks, nothing guessed
+    ('require_alternating(blocks(color=["blue", "green", "orange"]), first_color="blue")',
+     "Stack the blocks with alternate colours, starting with blue.", MIXED),
     # temperature and size words are not colours
     ('require_stack(blocks(color="warm", size="big"))', "Stack the big warm blocks.", MIXED),
     ('require_stack(blocks(color="big"))', "Stack the bigger blocks.", MIXED),

@@ -190,6 +190,12 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         if color in (kind, f"{kind}s", f"the {kind}"):  # zone("zone"): the kind word, not a colour
             color = None
         found = [r for r in rows if r["kind"] == kind and color in (None, r["color"])]
+        only = [r for r in rows if r["kind"] == kind]
+        if not found and len(only) == 1 and color not in {r["color"] for r in rows}:
+            # zone("purple") with one yellow zone and nothing purple: a colour copied from an example, where
+            # the goal says "the zone" (a goal cannot name a place the scene lacks); a colour some object has
+            # may be a loop over colours, and stays an error
+            return only[0]
         if len(found) != 1:
             colors = sorted({r["color"] for r in rows if r["kind"] == kind})
             which = f"{color} {kind}" if color is not None else f"single {kind} (there are {len(found)})"

@@ -15,8 +15,10 @@ knowledge:
 
 * a block colour written as a literal (``blocks(color="orange")``) that the goal uses only to name
   a place ("the orange zone");
-* a block colour written as a literal that the goal never says, when the scene has blocks of other
-  colours too (with blocks of one colour only, picking it picks them all and changes nothing) and
+* a block colour written as a literal that the goal never says, when the scene has blocks of
+  colours the literal does not list (a literal that lists every block colour, such as
+  ``["green", "yellow"]`` for the two colours of an alternating stack, picks them all: it is
+  ``blocks()`` and guesses nothing; on the judge set the repair of that pick was worse) and
   no zone or bowl has that colour (a place's colour is the "matching colour" reading: on seed
   10001 the model's ``require_inside(blocks(color="brown"), bowl("brown"))`` for "the bowls with
   matching colors" was right, and its repair was worse);
@@ -79,7 +81,9 @@ def ungrounded(code: str, goal: str, rows: Iterable[dict[str, Any]]) -> str | No
     place_colours = {r["color"] for r in rows if r.get("kind") in ("zone", "bowl")}
     for _, call in named_calls(tree, "blocks"):
         arg = _argument(call, 0, "color")
-        for colour in _strings(arg) if arg is not None else []:
+        colours = _strings(arg) if arg is not None else []
+        picked = set(colours)
+        for colour in colours:  # in the answer's order: the repair request must not vary between runs
             if colour.lower() in _NOT_COLOURS:
                 continue
             said = [i for i, w in enumerate(words) if w == colour.lower()]
@@ -87,7 +91,7 @@ def ungrounded(code: str, goal: str, rows: Iterable[dict[str, Any]]) -> str | No
                 noun = words[said[0] + 1]
                 return (f'blocks(color="{colour}") picks {colour} blocks, but in the goal "{colour}" names the '
                         f'{colour} {noun}, not the blocks: pick the blocks the goal means (all of them: blocks())')
-            if not said and block_colours - {colour} and colour not in place_colours:
+            if not said and block_colours - picked and colour not in place_colours:
                 return (f'blocks(color="{colour}") picks {colour} blocks, but the goal names no colour "{colour}": '
                         "when the goal means a colour chosen by a property (the same colour as a place, the commonest "
                         'colour ...), compute it from the objects, e.g. from [b["color"] for b in blocks()]')
