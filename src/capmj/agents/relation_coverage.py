@@ -10,10 +10,10 @@ check says "achieved" of every state that keeps the relation it wrote and breaks
 out (an unstacked tower, a ring of swapped colours).
 
 The rule is a reader's, with no task knowledge: a goal that says "stack" asks for a stack or
-layers, "structure" or "layer" for layers, "circle" or "ring" for a circle, "alternat..." for alternating colours, and "in/on/into the
-... zone/bowl" for where the objects must be.  A check that calls none of the matching
-``require_*`` misses a relation the goal names.  The words are the relations' own names in the
-prompt, not any task's goal.
+layers, "structure" or "layer" for layers, "circle" or "ring" for a circle, "alternat..." for
+alternating colours, and "in/on/into the ... zone/bowl" for where the objects must be.  A check
+that calls none of the matching ``require_*`` misses a relation the goal names.  The words are the
+relations' own names in the prompt, not any task's goal.
 """
 
 from __future__ import annotations
