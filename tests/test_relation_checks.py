@@ -182,3 +182,21 @@ def test_calls_a_scene_can_pass_together_are_not_impossible() -> None:
              "require_count(blocks(), zone('green'), 2)\nrequire_outside(blocks(), bowl('red'))\n"
              "require_inside(blocks(), 'top left')", env)
     assert failures.impossible() is None
+
+
+def test_the_impossible_sentence_does_not_vary_with_string_hashing() -> None:
+    """The sentence goes into the repair request, whose text keys the completion cache: with the names
+    of a frozenset in hash order, reruns of the same judge set missed the cache and changed errors."""
+    import subprocess
+    import sys
+
+    script = ("import sys; sys.path.insert(0, 'tests')\n"
+              "from test_relation_checks import place, tower\n"
+              "from capmj.agents.relation_checks import relation_env\n"
+              "from capmj.agents.sandbox import run_code\n"
+              "env, f = relation_env([place(1, 'zone', 'green'), place(4, 'bowl', 'red'), *tower(list('abcdefgh'))])\n"
+              "run_code(\"require_inside(blocks(), zone('green'))\\nrequire_inside(blocks(), bowl('red'))\", env)\n"
+              "print(f.impossible())\n")
+    said = {subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                           env={**__import__("os").environ, "PYTHONHASHSEED": str(seed)}).stdout for seed in range(4)}
+    assert len(said) == 1 and "obj_id 2 in two different places" in said.pop()

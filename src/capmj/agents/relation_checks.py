@@ -15,9 +15,10 @@ unmoved, a circle, a row, alternating colours, a count, distinct colours); each 
 the records of :mod:`capmj.agents.scene_records` with the tasks' own tolerances
 (:mod:`capmj.tasks.predicates`), as the records themselves are.  No call knows any task.
 
-:func:`relation_env` builds the names a check may use for one scene; :class:`Failures` collects
-what failed.  Calls are forgiving in what they take (a record, a list of records, a name, a colour
-word where a zone or bowl is meant) because a small model mixes them; anything else raises
+:func:`relation_env` builds the names a check may use for one scene: the selectors of
+:mod:`capmj.agents.relation_picks` (which also read what each check is given: a record, a list of
+records, a name, a colour word where a zone or bowl is meant, because a small model mixes them)
+and the checks here; :class:`Failures` collects what failed.  Anything a check cannot read raises
 :class:`~capmj.errors.PlanError` with the valid choices, which the reporter's repair request quotes.
 """
 
@@ -30,39 +31,19 @@ from typing import Any
 
 import numpy as np
 
+from capmj.agents.relation_picks import SELECTORS, Picks, Record, short
 from capmj.agents.scene_facts import AREAS
-from capmj.errors import PlanError
-from capmj.sim.palette import COOL, WARM
 from capmj.tasks.predicates import CENTRE_TOL, CIRCLE_TOL, ROW_LINE_TOL, fit_circle
 from capmj.tasks.predicates.tolerances import MOVE_TOL
 
 __all__ = ["CHECKS", "NAMES", "SELECTORS", "Failures", "relation_env"]
 
-Record = dict[str, Any]
-
-SIZE_WORDS = {"big": "big", "bigger": "big", "large": "big", "small": "small", "smaller": "small", "tiny": "tiny"}
-"""What ``blocks(size=...)`` accepts, and the record size each word means."""
-SIDES = {"left": (1, -1.0), "right": (1, 1.0), "front": (0, 1.0), "rear": (0, -1.0)}
-"""``blocks_beside`` sides: (axis, sign) of the start-centre difference (left = y−, front = x+, as the area words)."""
-
 CHECKS = ("require_inside", "require_outside", "require_stack", "require_layers", "require_on_table",
           "require_unmoved", "require_circle", "require_row", "require_alternating", "require_count",
           "require_different_colors")
 """The relation checks, in the order the prompt documents them."""
-SELECTORS = ("blocks", "other_blocks", "blocks_beside", "zone", "bowl", "ball", "zones", "bowls")
-"""The functions that pick objects and places."""
 NAMES = ("objects", *SELECTORS, *CHECKS)
 """Every name :func:`relation_env` binds: what a check may use besides Python's builtins."""
-
-
-class _Record(dict):  # type: ignore[type-arg]
-    """A record whose keys read as attributes too (``b.color``): small models write both."""
-
-    def __getattr__(self, key: str) -> Any:
-        try:
-            return self[key]
-        except KeyError:
-            raise AttributeError(f"an object has no key {key!r}; its keys are {list(self)}") from None
 
 
 @dataclass
@@ -97,7 +78,7 @@ class Failures:
                 return f"it requires {detail} of {len(names)} objects in a place"
             if relation == "layers" and (sum(detail) != len(names) or min(detail, default=0) < 1):
                 return f"it requires layers of {list(detail)} of {len(names)} objects"
-            for name in names:
+            for name in sorted(names):  # sorted: the repair request must not vary with string hashing
                 {"inside": inside, "outside": outside}.get(relation, {}).setdefault(name, []).append(detail)
             if relation == "stack" and len(names) > 1:
                 stacks.append(names)
@@ -105,10 +86,10 @@ class Failures:
             layers += [(names, detail)] if relation == "layers" else []
         for name, places in inside.items():
             if any(p <= q for p in places for q in outside.get(name, [])):
-                return f"it requires {_short(name)} both in and out of the same place"
+                return f"it requires {short(name)} both in and out of the same place"
             containers = [p for p in places if not p & set(AREAS)]
             if any(not p & q for p in containers for q in containers):
-                return f"it requires {_short(name)} in two different places at once"
+                return f"it requires {short(name)} in two different places at once"
         for tower in stacks:
             if any(len(tower & t) > 1 for t in tables):
                 return "it requires the same objects in one tower and all on the table"
@@ -126,149 +107,37 @@ class Failures:
         return "; ".join(s for s, _ in self.items) if self.items else "every required relation holds"
 
 
-def _short(name: str) -> str:
-    return name.removeprefix("movable ")
+def _names(group: Sequence[Record]) -> frozenset[str]:
+    return frozenset(r["name"] for r in group)
 
 
-def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = None
-                 ) -> tuple[dict[str, Any], Failures]:
-    """The names a check may use over the scene ``rows`` (records), and the :class:`Failures` its calls fill.
+class _Checks:
+    """The relation checks over one scene's :class:`~capmj.agents.relation_picks.Picks`: each measures its
+    relation and adds what fails to :class:`Failures` (and what it asked for, for :meth:`Failures.impossible`)."""
 
-    ``start_rows``: the records of the scene the robot started from (for ``require_unmoved``; the
-    scene itself when None)."""
-    rows = [_Record(r) for r in rows]  # fresh: the check may mutate what it is given
-    by_name = {r["name"]: r for r in rows}
-    start = {r["name"]: r for r in (start_rows if start_rows is not None else rows)}
-    movable = [r for r in rows if r["kind"] not in ("zone", "bowl", "fixture")]
-    failures = Failures()
+    def __init__(self, picks: Picks, failures: Failures) -> None:
+        self.p, self.f = picks, failures
 
-    def objs_of(value: Any, what: str = "objects") -> list[Record]:
-        if value is None:
-            raise PlanError(f"ValueError: {what} is None: pick objects with blocks(...) or a list of records")
-        items = value if isinstance(value, (list, tuple, set, frozenset)) else [value]
-        out: list[Record] = []
-        for item in items:
-            name = item.get("name") if isinstance(item, dict) else item
-            if not isinstance(name, str) or name not in by_name:
-                raise PlanError(f"ValueError: {str(item)[:60]!r} is not an object of this scene: pass records "
-                                f"from blocks(...) or objects, or their full names")
-            out.append(by_name[name])
-        return out
-
-    def place_one(value: Any) -> str:
-        if isinstance(value, dict):
-            value = value.get("name")
-        if isinstance(value, str):
-            if value in AREAS:
-                return value
-            if value in by_name and by_name[value]["kind"] in ("zone", "bowl"):
-                return value
-            found = [r["name"] for r in rows if r["kind"] in ("zone", "bowl")
-                     and value in (r["color"], f"{r['color']} {r['kind']}", r["kind"])]
-            if len(found) == 1:
-                return found[0]
-        places = [r["name"] for r in rows if r["kind"] in ("zone", "bowl")]
-        raise PlanError(f"ValueError: {str(value)[:60]!r} is not a place: use zone(color), bowl(color), zones(), "
-                        f"bowls(), one of {places} or an area {list(AREAS)}")
-
-    def place_of(value: Any) -> tuple[str, ...]:
-        """Zone/bowl names or area words; a list of places means any one of them."""
-        if isinstance(value, (list, tuple)) and value:
-            return tuple(place_one(v) for v in value)
-        return (place_one(value),)
-
-    def is_in(r: Record, where: tuple[str, ...]) -> bool:
-        return any(r["area"] == p if p in AREAS else r["inside"] == p for p in where)
-
-    def said(where: tuple[str, ...]) -> str:
-        return where[0] if len(where) == 1 else "any of " + ", ".join(where)
-
-    def the(kind: str, color: Any = None) -> Record:
-        """The one object of ``kind`` (of ``color`` when given)."""
-        if isinstance(color, dict):
-            color = color.get("color")
-        if color in (kind, f"{kind}s", f"the {kind}"):  # zone("zone"): the kind word, not a colour
-            color = None
-        found = [r for r in rows if r["kind"] == kind and color in (None, r["color"])]
-        only = [r for r in rows if r["kind"] == kind]
-        if not found and len(only) == 1 and color not in {r["color"] for r in rows}:
-            # zone("purple") with one yellow zone and nothing purple: a colour copied from an example, where
-            # the goal says "the zone" (a goal cannot name a place the scene lacks); a colour some object has
-            # may be a loop over colours, and stays an error
-            return only[0]
-        if len(found) != 1:
-            colors = sorted({r["color"] for r in rows if r["kind"] == kind})
-            which = f"{color} {kind}" if color is not None else f"single {kind} (there are {len(found)})"
-            hint = (f": the only {kind} is the {colors[0]} one, {kind}() picks it" if len(colors) == 1 else
-                    f": loop over {kind}s() to visit only those that exist" if kind != "ball" else "")
-            raise PlanError(f"ValueError: there is no {which}; the {kind}s here are {colors}{hint}")
-        return found[0]
-
-    def blocks_beside(block: Any, side: str, more_than: float = 0.0) -> list[Record]:
-        ref = objs_of(block, "block")[0]
-        if side not in SIDES:
-            raise PlanError(f"ValueError: side {side!r}: valid: {', '.join(SIDES)}")
-        axis, sign = SIDES[side]
-        return [r for r in blocks() if r["name"] != ref["name"]
-                and sign * (start[r["name"]]["centre"][axis] - start[ref["name"]]["centre"][axis]) > more_than]
-
-    def blocks(color: Any = None, size: str | None = None, start_area: str | None = None) -> list[Record]:
-        words = [color] if isinstance(color, str) else list(color or [])
-        if size is None and len(words) == 1 and words[0] in SIZE_WORDS:  # blocks(color="big"): a size, not a colour
-            size, words, color = words[0], [], None
-        colors = None if color is None else {c for w in words for c in (WARM if w == "warm" else COOL if w == "cool"
-                                                                        else [w])}
-        if size is not None and size not in SIZE_WORDS:
-            raise PlanError(f"ValueError: size {size!r}: valid: {', '.join(SIZE_WORDS)}")
-        if start_area is not None and start_area not in AREAS:
-            raise PlanError(f"ValueError: start_area {start_area!r}: valid: {', '.join(AREAS)}")
-        every = [r for r in movable if r["kind"] == "block"]
-        found = [r for r in every if (colors is None or r["color"] in colors)
-                 and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
-        if not found and every and (colors is not None or size is not None or start_area is not None):
-            # legitimate in a loop over bowls (a distractor's colour), but also a place's colour read as the
-            # blocks' (a literal one is caught first by relation_grounding): kept for the repair request of a
-            # check that tests nothing
-            failures.empty_picks.append(
-                f"blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block: the blocks here "
-                f"have the colours {sorted({r['color'] for r in every})}, the sizes {sorted({r['size'] for r in every})} "
-                f"and started in {sorted({r['start_area'] for r in every})}")
-        return found
-
-    def other_blocks(objs: Any) -> list[Record]:
-        names = {r["name"] for r in objs_of(objs)}
-        return [r for r in blocks() if r["name"] not in names]
-
-    def checked(name: str, fn: Callable[..., None]) -> Callable[..., None]:
-        def run(*args: Any, **kwargs: Any) -> None:
-            failures.calls += 1
-            fn(*args, **kwargs)
-        run.__name__ = name
-        return run
-
-    def names_of(group: Sequence[Record]) -> frozenset[str]:
-        return frozenset(r["name"] for r in group)
-
-    def require_inside(objs: Any, place: Any) -> None:
-        where, group = place_of(place), objs_of(objs)
-        failures.demands.append(("inside", names_of(group), frozenset(where)))
-        bad = [r["name"] for r in group if not is_in(r, where)]
+    def require_inside(self, objs: Any, place: Any) -> None:
+        where, group = self.p.places(place), self.p.objs(objs)
+        self.f.demands.append(("inside", _names(group), frozenset(where)))
+        bad = [r["name"] for r in group if not self.p.is_in(r, where)]
         if bad:
-            failures.add(f"not in the {said(where)}: {', '.join(map(_short, bad))}", bad)
+            self.f.add(f"not in the {self.p.said(where)}: {', '.join(map(short, bad))}", bad)
 
-    def require_outside(objs: Any, place: Any) -> None:
-        where, group = place_of(place), objs_of(objs)
-        failures.demands.append(("outside", names_of(group), frozenset(where)))
-        bad = [r["name"] for r in group if is_in(r, where)]
+    def require_outside(self, objs: Any, place: Any) -> None:
+        where, group = self.p.places(place), self.p.objs(objs)
+        self.f.demands.append(("outside", _names(group), frozenset(where)))
+        bad = [r["name"] for r in group if self.p.is_in(r, where)]
         if bad:
-            failures.add(f"must not be in the {said(where)}: {', '.join(map(_short, bad))}", bad)
+            self.f.add(f"must not be in the {self.p.said(where)}: {', '.join(map(short, bad))}", bad)
 
-    def require_stack(objs: Any, place: Any = None) -> None:
-        group = objs_of(objs)
+    def require_stack(self, objs: Any, place: Any = None) -> None:
+        group = self.p.objs(objs)
         if place is not None:
-            require_inside(group, place)
-        names = names_of(group)
-        failures.demands.append(("stack", names, None))
+            self.require_inside(group, place)
+        names = _names(group)
+        self.f.demands.append(("stack", names, None))
         bottom = [r for r in group if r["level"] == 1]
         tower = bottom[:1]
         while tower:
@@ -281,45 +150,45 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         bad = [r["name"] for r in group if r["name"] not in in_tower]
         if bad or len(bottom) != (1 if group else 0) or len(in_tower) != len(names):
             bad = bad or [r["name"] for r in bottom[1:]]
-            failures.add(f"not one upright stack of {len(group)}: {', '.join(map(_short, bad))} off the tower", bad)
+            self.f.add(f"not one upright stack of {len(group)}: {', '.join(map(short, bad))} off the tower", bad)
 
-    def require_layers(objs: Any, counts: Sequence[int]) -> None:
-        group = objs_of(objs)
-        failures.demands.append(("layers", names_of(group), tuple(int(c) for c in counts)))
+    def require_layers(self, objs: Any, counts: Sequence[int]) -> None:
+        group = self.p.objs(objs)
+        self.f.demands.append(("layers", _names(group), tuple(int(c) for c in counts)))
         have = [sum(1 for r in group if r["level"] == k + 1) for k in range(max(len(counts), 1))]
         bad = [r["name"] for r in group if r["tilted"] or r["level"] > len(counts)]
         if list(have) != list(counts) or bad:
             top = [r["name"] for r in group if r["level"] == max((x["level"] for x in group), default=1)]
-            failures.add(f"layers (bottom first) hold {have}, not {list(counts)}", bad or top)
+            self.f.add(f"layers (bottom first) hold {have}, not {list(counts)}", bad or top)
 
-    def require_on_table(objs: Any) -> None:
-        group = objs_of(objs)
-        failures.demands.append(("table", names_of(group), None))
+    def require_on_table(self, objs: Any) -> None:
+        group = self.p.objs(objs)
+        self.f.demands.append(("table", _names(group), None))
         bad = [r["name"] for r in group if r["level"] != 1 or r["tilted"]]
         if bad:
-            failures.add(f"not upright on the table: {', '.join(map(_short, bad))}", bad)
+            self.f.add(f"not upright on the table: {', '.join(map(short, bad))}", bad)
 
-    def require_unmoved(objs: Any) -> None:
-        bad = [r["name"] for r in objs_of(objs)
-               if math.dist(r["centre"][:2], start[r["name"]]["centre"][:2]) > MOVE_TOL]
+    def require_unmoved(self, objs: Any) -> None:
+        bad = [r["name"] for r in self.p.objs(objs)
+               if math.dist(r["centre"][:2], self.p.start[r["name"]]["centre"][:2]) > MOVE_TOL]
         if bad:
-            failures.add(f"moved from where they started: {', '.join(map(_short, bad))}", bad)
+            self.f.add(f"moved from where they started: {', '.join(map(short, bad))}", bad)
 
-    def require_circle(objs: Any, around: Any = None) -> None:
-        group = objs_of(objs)
+    def require_circle(self, objs: Any, around: Any = None) -> None:
+        group = self.p.objs(objs)
         centre, radius, resid = fit_circle([r["centre"] for r in group])
         if not math.isfinite(radius) or resid > CIRCLE_TOL:
             dist = [abs(math.dist(r["centre"][:2], centre) - radius) if math.isfinite(radius) else 0.0 for r in group]
             worst = [group[int(np.argmax(dist))]["name"]] if group else []
-            failures.add("the centres are not on one circle", worst)
+            self.f.add("the centres are not on one circle", worst)
             return
         if around is not None:
-            mid = objs_of(around, "around")[0]
+            mid = self.p.objs(around, "around")[0]
             if math.dist(mid["centre"][:2], centre) > CENTRE_TOL:
-                failures.add(f"the circle is not centred on the {_short(mid['name'])}", [r["name"] for r in group])
+                self.f.add(f"the circle is not centred on the {short(mid['name'])}", [r["name"] for r in group])
 
-    def require_row(objs: Any) -> None:
-        group = objs_of(objs)
+    def require_row(self, objs: Any) -> None:
+        group = self.p.objs(objs)
         xy = np.array([r["centre"][:2] for r in group], dtype=float).reshape(-1, 2)
         if len(xy) < 2:
             return
@@ -327,14 +196,14 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         direction = np.linalg.svd(q)[2][0]
         off = np.abs(q @ np.array([-direction[1], direction[0]]))
         if off.max() > ROW_LINE_TOL:
-            failures.add("the centres are not on one straight line", [group[int(np.argmax(off))]["name"]])
+            self.f.add("the centres are not on one straight line", [group[int(np.argmax(off))]["name"]])
 
-    def require_alternating(objs: Any, first_color: str | None = None, around: Any = None) -> None:
-        group = objs_of(objs)
+    def require_alternating(self, objs: Any, first_color: str | None = None, around: Any = None) -> None:
+        group = self.p.objs(objs)
         if len({r["level"] for r in group}) == len(group):  # a stack: bottom first
             order, cyclic = sorted(group, key=lambda r: r["level"]), False
         else:  # a ring or a group on the table: around the object `around` (as in require_circle), else their centre
-            mid = (objs_of(around, "around")[0]["centre"][:2] if around is not None
+            mid = (self.p.objs(around, "around")[0]["centre"][:2] if around is not None
                    else np.mean([r["centre"][:2] for r in group], axis=0))
             order = sorted(group, key=lambda r: math.atan2(r["centre"][1] - mid[1], r["centre"][0] - mid[0]))
             cyclic = True
@@ -343,19 +212,19 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
         if first_color is not None and order and not cyclic and order[0]["color"] != first_color:
             bad = [order[0]["name"]] + bad
         if bad:
-            failures.add(f"colours do not alternate ({' '.join(r['color'] for r in order)})", bad)
+            self.f.add(f"colours do not alternate ({' '.join(r['color'] for r in order)})", bad)
 
-    def require_count(objs: Any, place: Any, n: int) -> None:
-        where = place_of(place)
-        group = objs_of(objs)
-        failures.demands.append(("count", names_of(group), int(n)))
-        inside = [r["name"] for r in group if is_in(r, where)]
+    def require_count(self, objs: Any, place: Any, n: int) -> None:
+        where = self.p.places(place)
+        group = self.p.objs(objs)
+        self.f.demands.append(("count", _names(group), int(n)))
+        inside = [r["name"] for r in group if self.p.is_in(r, where)]
         if len(inside) != int(n):
             bad = inside if len(inside) > n else [r["name"] for r in group if r["name"] not in inside]
-            failures.add(f"{len(inside)} of them in the {said(where)}, not {n}", bad)
+            self.f.add(f"{len(inside)} of them in the {self.p.said(where)}, not {n}", bad)
 
-    def require_different_colors(objs: Any) -> None:
-        group = objs_of(objs)
+    def require_different_colors(self, objs: Any) -> None:
+        group = self.p.objs(objs)
         seen: dict[str, str] = {}
         bad = []
         for r in group:
@@ -363,15 +232,27 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
                 bad.append(r["name"])
             seen.setdefault(r["color"], r["name"])
         if bad:
-            failures.add(f"colours repeat: {', '.join(map(_short, bad))}", bad)
+            self.f.add(f"colours repeat: {', '.join(map(short, bad))}", bad)
 
-    env: dict[str, Any] = {
-        "objects": rows,
-        "blocks": blocks, "other_blocks": other_blocks, "blocks_beside": blocks_beside,
-        "zone": lambda color=None: the("zone", color), "bowl": lambda color=None: the("bowl", color),
-        "ball": lambda color=None: the("ball", color),
-        "zones": lambda: [r for r in rows if r["kind"] == "zone"], "bowls": lambda: [r for r in rows if r["kind"] == "bowl"],
-    }
-    local = locals()
-    env.update({name: checked(name, local[name]) for name in CHECKS})
-    return env, failures
+
+
+def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = None
+                 ) -> tuple[dict[str, Any], Failures]:
+    """The names a check may use over the scene ``rows`` (records), and the :class:`Failures` its calls fill.
+
+    ``start_rows``: the records of the scene the robot started from (for ``require_unmoved``; the
+    scene itself when None)."""
+    picks = Picks(rows, start_rows)
+    failures = Failures(empty_picks=picks.empty_picks)
+    checks = _Checks(picks, failures)
+
+    def counted(name: str) -> Callable[..., None]:
+        fn = getattr(checks, name)
+
+        def run(*args: Any, **kwargs: Any) -> None:
+            failures.calls += 1
+            fn(*args, **kwargs)
+        run.__name__ = name
+        return run
+
+    return {**picks.bindings(), **{name: counted(name) for name in CHECKS}}, failures
