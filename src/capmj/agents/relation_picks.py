@@ -20,7 +20,7 @@ from capmj.agents.scene_facts import AREAS
 from capmj.errors import PlanError
 from capmj.sim.palette import COOL, WARM
 
-__all__ = ["PLACE_KINDS", "SELECTORS", "SIZE_WORDS", "Picks", "Record"]
+__all__ = ["SELECTORS", "SIZE_WORDS", "Picks", "Record", "short"]
 
 Record = dict[str, Any]
 
