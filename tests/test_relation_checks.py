@@ -200,3 +200,26 @@ def test_the_impossible_sentence_does_not_vary_with_string_hashing() -> None:
     said = {subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
                            env={**__import__("os").environ, "PYTHONHASHSEED": str(seed)}).stdout for seed in range(4)}
     assert len(said) == 1 and "obj_id 2 in two different places" in said.pop()
+
+
+def test_a_tower_also_required_in_layers_of_several_can_be_read_as_its_place() -> None:
+    """``Failures.layered_towers`` finds the group; with it, ``require_stack`` asks only for the place."""
+    base = [block(i + 2, "red", (0.5 + 0.05 * i, 0.2, 0.02), inside=ZONE) for i in range(2)]
+    top = block(4, "red", (0.525, 0.2, 0.06), level=2, inside=ZONE, rests_on=base[0]["name"])
+    rows = [place(1, "zone", "green"), *base, top]
+    check = "require_stack(blocks(), zone('green'))\nrequire_layers(blocks(), [2, 1])"
+    env, failures = relation_env(rows)
+    run_code(check, env)
+    assert failures.items and "layers of several" in (failures.impossible() or "")
+    layered = failures.layered_towers()
+    assert layered == {frozenset(r["name"] for r in rows[1:])}
+    env, failures = relation_env(rows, layered=layered)
+    run_code(check, env)
+    assert not failures.items and failures.impossible() is None
+    out = [place(1, "zone", "green"), *base, {**top, "inside": ""}]
+    env, failures = relation_env(out, layered=layered)
+    run_code(check, env)
+    assert failures.wrong == (top["name"],)  # the place still holds for every block
+    env, failures = relation_env(rows)
+    run_code("require_stack(blocks())\nrequire_layers(blocks(), [1, 1, 1])", env)
+    assert not failures.layered_towers()  # one block a layer is a tower: no contradiction to read

@@ -171,3 +171,15 @@ def test_a_relation_the_goal_names_and_the_check_leaves_out_is_repaired_then_dou
     judged = judge(tmp_path / "repaired", server, "oracle,unstacked", task="stack-all-blocks-on-a-zone")
     assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
         (r["label"], "repair", "high") for r in judged]
+
+
+def test_a_tower_also_required_in_layers_is_read_as_its_place(server: StubLLMServer, tmp_path: Path) -> None:
+    """The pyramid as ``require_stack`` and ``require_layers`` of the same blocks (the 1.5B model's answer, kept
+    after the impossible repair): no repair request, the layers say the shape, the tower its place, and the
+    verdict follows the labels with high confidence."""
+    server.respond_with(lambda request: code("require_stack(blocks(), zone())\nrequire_layers(blocks(), [9, 4, 1])"))
+    judged = judge(tmp_path, server, "oracle,unstacked,toppled_out", task="build-rectangular-pyramid")
+    assert len(server.requests) == len(judged) and {r["label"] for r in judged} == {True, False}
+    assert not any("failed" in prompt_text(request) for request in server.requests)  # no repair request
+    assert [(r["verdict"], r["source"], r["confidence"]) for r in judged] == [
+        (r["label"], "code", "high") for r in judged]

@@ -93,10 +93,22 @@ class Failures:
         for tower in stacks:
             if any(len(tower & t) > 1 for t in tables):
                 return "it requires the same objects in one tower and all on the table"
-            if any(tower == group and max(counts) > 1 for group, counts in layers):
+            if tower in self.layered_towers():
                 return ("it requires the same objects in one tower and in layers of several: a tower is a single column; "
                         "a structure with several blocks in a layer is require_layers alone")
         return None
+
+    def layered_towers(self) -> frozenset[frozenset[str]]:
+        """The groups of objects required both as one tower and in layers of several blocks.
+
+        No scene passes both, and the prompt says which one a structure is ("a structure with
+        several blocks in a layer is require_layers"): the 1.5B model wrote "a 9-4-1 pyramid in the
+        zone" as ``require_stack(blocks, zone())`` with ``require_layers(blocks, [9, 4, 1])`` and kept
+        the tower after the repair request said so.  :func:`relation_env` can read such a tower as its
+        place only (``layered``)."""
+        towers = {names for relation, names, _ in self.demands if relation == "stack" and len(names) > 1}
+        return frozenset(names for relation, names, counts in self.demands
+                         if relation == "layers" and names in towers and max(counts, default=0) > 1)
 
     @property
     def wrong(self) -> tuple[str, ...]:
@@ -115,8 +127,8 @@ class _Checks:
     """The relation checks over one scene's :class:`~capmj.agents.relation_picks.Picks`: each measures its
     relation and adds what fails to :class:`Failures` (and what it asked for, for :meth:`Failures.impossible`)."""
 
-    def __init__(self, picks: Picks, failures: Failures) -> None:
-        self.p, self.f = picks, failures
+    def __init__(self, picks: Picks, failures: Failures, layered: frozenset[frozenset[str]]) -> None:
+        self.p, self.f, self.layered = picks, failures, layered
 
     def require_inside(self, objs: Any, place: Any) -> None:
         where, group = self.p.places(place), self.p.objs(objs)
@@ -137,6 +149,8 @@ class _Checks:
         if place is not None:
             self.require_inside(group, place)
         names = _names(group)
+        if names in self.layered:  # also required in layers of several: those say the shape
+            return
         self.f.demands.append(("stack", names, None))
         bottom = [r for r in group if r["level"] == 1]
         tower = bottom[:1]
@@ -236,15 +250,16 @@ class _Checks:
 
 
 
-def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = None
-                 ) -> tuple[dict[str, Any], Failures]:
+def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = None,
+                 layered: frozenset[frozenset[str]] = frozenset()) -> tuple[dict[str, Any], Failures]:
     """The names a check may use over the scene ``rows`` (records), and the :class:`Failures` its calls fill.
 
     ``start_rows``: the records of the scene the robot started from (for ``require_unmoved``; the
-    scene itself when None)."""
+    scene itself when None).  ``layered``: groups (of names) whose ``require_stack`` asks only for
+    its place, because the check also requires them in layers (:meth:`Failures.layered_towers`)."""
     picks = Picks(rows, start_rows)
     failures = Failures(empty_picks=picks.empty_picks)
-    checks = _Checks(picks, failures)
+    checks = _Checks(picks, failures, layered)
 
     def counted(name: str) -> Callable[..., None]:
         fn = getattr(checks, name)

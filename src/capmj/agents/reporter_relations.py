@@ -24,6 +24,9 @@ Each answer gets one repair request when it tests nothing or cannot be right:
   lists the valid names; never a function written by ``parse_function``: a made-up check would be
   a second, unmeasured reporter).  Still so after the repair: the ``checked`` question as ``direct``
   (:class:`~capmj.agents.reporter_records.RecordsReporter`);
+* one contradiction has a reading: a group required as one tower and in layers of several is read
+  as required in layers, the tower asking only for its place (:data:`LAYERED`; the prompt says a
+  structure with several blocks in a layer is ``require_layers``);
 * its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
   :meth:`~capmj.agents.relation_checks.Failures.impossible`): it would say "not achieved", naming
   objects, of every state.  Still so after the repair: kept, low-confidence (``impossible_check``);
@@ -56,7 +59,7 @@ from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun
 from capmj.errors import PlanError, describe
 
-__all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "PROMPT", "RelationsReporter"]
+__all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "RelationsReporter"]
 
 PROMPT = "reporter_relations"
 """The prompt file (``prompts/reporter_relations.py``) and the LMP name in transcripts."""
@@ -67,6 +70,10 @@ BLIND = "it calls none of the require_... checks, so it tests nothing: call the 
 HOLDS_AT_START = ("every require_... call passes in the scene the robot started from, and no goal holds there: "
                   "require what the goal asks the robot to achieve (where the objects must be, stacks, layers ...)")
 """The problem the repair request states when the check finds nothing wrong with the start scene."""
+
+LAYERED = ("require_stack of objects also required in layers of several is read as their place only: "
+           "a structure with several blocks in a layer is require_layers")
+"""The transcript note when a tower call is read as its place (:meth:`~capmj.agents.relation_checks.Failures.layered_towers`)."""
 
 IMPOSSIBLE = "no arrangement of the objects could pass every require_... call, so it says \"not achieved\" of every scene"
 """The start of the problem the repair request states when the calls contradict each other."""
@@ -97,10 +104,12 @@ class RelationsReporter(RecordsReporter):
                 f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {' '.join(goal.split())}\n")
 
     def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]],
-             start: list[dict[str, Any]] | None, scene: str, label: str) -> tuple[CheckRun, Failures | None]:
-        """Run prepared ``code`` on one scene's records (``start``: the start scene's, for ``require_unmoved``):
-        the verdict is that no required relation failed, and what its calls asked for (None when it failed to run)."""
-        env, failures = relation_env(rows, start)
+             start: list[dict[str, Any]] | None, scene: str, label: str,
+             layered: frozenset[frozenset[str]] = frozenset()) -> tuple[CheckRun, Failures | None]:
+        """Run prepared ``code`` on one scene's records (``start``: the start scene's, for ``require_unmoved``;
+        ``layered``: see :func:`relation_env`): the verdict is that no required relation failed, and what its
+        calls asked for (None when it failed to run)."""
+        env, failures = relation_env(rows, start, layered)
         failed = "error" if label == "result" else f"{label} error"
         try:
             run_code(code, env, budget=session.lmp_budget,
@@ -134,6 +143,10 @@ class RelationsReporter(RecordsReporter):
             session.record(call, "blind", BLIND)
             return CheckRun(None, problem=BLIND, code=code)
         run, asked = self._run(session, call, code, rows, start, "", "result")
+        layered = asked.layered_towers() if asked is not None else frozenset()
+        if layered:
+            session.record(call, "layered", LAYERED)
+            run, asked = self._run(session, call, code, rows, start, "", "result", layered)
         if run.problem is not None or asked is None:
             return run
 
@@ -150,7 +163,8 @@ class RelationsReporter(RecordsReporter):
         guessed = ungrounded(code, goal, rows)
         if guessed is not None:
             return doubted("ungrounded_literal", guessed, "ungrounded")
-        if start is not None and self._run(session, call, code, start, start, " start", "start scene")[0].verdict:
+        if start is not None and self._run(session, call, code, start, start, " start", "start scene",
+                                           layered)[0].verdict:
             return doubted("holds_at_start", HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1]),
                            None)
         unasked = uncovered(code, goal)
