@@ -136,6 +136,12 @@ def test_bad_arguments_name_the_valid_choices(code: str, needle: str) -> None:
     assert needle in str(err.value)
 
 
+def test_a_call_with_missing_arguments_names_the_check_as_the_prompt_does() -> None:
+    env, _ = relation_env([place(1, "zone", "green"), *tower(["red"])])
+    with pytest.raises(PlanError, match=r"TypeError: require_count\(\) missing 1 required positional argument: 'n'"):
+        run_code("require_count(blocks(), zone())", env)
+
+
 def test_every_check_is_bound_and_counted() -> None:
     env, failures = relation_env([place(1, "zone", "green"), *tower(["red", "blue"])])
     assert tuple(env) == NAMES and set(CHECKS) <= set(env)

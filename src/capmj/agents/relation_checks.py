@@ -266,7 +266,10 @@ def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = N
 
         def run(*args: Any, **kwargs: Any) -> None:
             failures.calls += 1
-            fn(*args, **kwargs)
+            try:
+                fn(*args, **kwargs)
+            except TypeError as exc:  # "require_count() missing ... 'n'", as the model called it, not "_Checks.require_count()"
+                raise TypeError(str(exc).replace(f"{_Checks.__name__}.", "")) from None
         run.__name__ = name
         return run
 
