@@ -249,7 +249,6 @@ class _Checks:
             self.f.add(f"colours repeat: {', '.join(map(short, bad))}", bad)
 
 
-
 def relation_env(rows: Sequence[Record], start_rows: Sequence[Record] | None = None,
                  layered: frozenset[frozenset[str]] = frozenset()) -> tuple[dict[str, Any], Failures]:
     """The names a check may use over the scene ``rows`` (records), and the :class:`Failures` its calls fill.
