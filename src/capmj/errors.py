@@ -55,8 +55,18 @@ class PluginError(TaskError):
 
 
 class ConfinementError(PluginError):
-    """LLM-written task code is not confined: refused by the static check or the runtime guard,
-    or changed since it was accepted.  Such code is never imported."""
+    """LLM-written task code cannot run confined or broke its confinement: no jail on this machine,
+    refused by the static check or the runtime guard, a malformed message from the jail, or a
+    package changed since it was accepted.  Such code never runs outside the jail."""
+
+
+class ConfinedTaskError(TaskError):
+    """LLM-written task code failed inside its jail: it raised (``remote_type`` names the class it
+    raised), or a limit of the jail ended it (CPU, memory, wall time)."""
+
+    def __init__(self, message: str, remote_type: str | None = None) -> None:
+        super().__init__(message)
+        self.remote_type = remote_type
 
 
 class AgentError(CapmjError):

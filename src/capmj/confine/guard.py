@@ -1,7 +1,11 @@
-"""The runtime layer: a PEP 578 audit hook that refuses what the static check missed (issue #25).
+"""An early rejection inside the jail: a PEP 578 audit hook that names what the static check missed.
 
-Installed by the check worker after its own (trusted) imports and before it loads a candidate,
-it watches every audit event of the process for the rest of its life:
+It lives in the same interpreter as the generated code, so it is *not* the boundary (code that
+reaches the interpreter's internals can switch it off; the jail, :mod:`capmj.confine.jail`, and
+the seccomp filter hold regardless).  Its job is the explanation: a refused event becomes the
+candidate's rejection reason, naming the door.  Installed by the jailed host
+(:mod:`capmj.confine.host`) after its own trusted imports and before it loads a candidate, it
+watches every audit event of the process for the rest of its life:
 
 - **process creation and signals**: ``os.system``, ``os.exec*``, ``os.spawn*``,
   ``os.posix_spawn``, ``os.fork``/``forkpty``, ``subprocess.Popen``, ``os.kill``;
@@ -16,18 +20,15 @@ it watches every audit event of the process for the rest of its life:
   for ``importlib.import_module``, a finder at the front of ``sys.meta_path``).  Imports that
   trusted code makes on the candidate's behalf are allowed; their effects are watched like any.
 
-A refusal is final: the hook writes the event to the worker's events stream and ends the
-process at once (``os._exit``), so a candidate cannot catch the exception and carry on.  What
+A refusal is final: the hook reports the event to the parent and ends the process at once (``os._exit``), so a candidate cannot catch the exception and carry on.  What
 this layer does not stop is written down in ``docs/security.md``.
 """
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from importlib.abc import MetaPathFinder
-from pathlib import Path
 from types import FrameType
 from typing import Any, Callable, Sequence
 
@@ -65,8 +66,8 @@ def _module_allowed(name: str) -> bool:
 class Guard:
     """The hook's state: the candidate's file, where to report, the check now running."""
 
-    def __init__(self, candidate: Path, report: Callable[[dict[str, Any]], None]) -> None:
-        self.candidate = str(candidate)
+    def __init__(self, candidate: str, report: Callable[[dict[str, Any]], None]) -> None:
+        self.candidate = candidate
         self.report = report
         self.check = ""
         self._busy = False
@@ -118,18 +119,12 @@ class _Finder(MetaPathFinder):
         return self.guard.find_spec(fullname, path, target)
 
 
-def install(candidate: Path, events_fd: int) -> Guard:
+def install(candidate: str, report: Callable[[dict[str, Any]], None]) -> Guard:
     """Install the guard for the rest of the process (an audit hook cannot be removed).
 
-    It reports on its own duplicate of ``events_fd``, written with ``os.write``: a refusal at
-    interpreter exit (an ``atexit`` handler, a thread) still gets recorded after the worker has
-    closed its events file.
+    ``candidate`` is the file name the generated code was compiled with; ``report`` is called with
+    ``{"violation": {...}}`` before the process ends.
     """
-    fd = os.dup(events_fd)
-
-    def report(event: dict[str, Any]) -> None:
-        os.write(fd, (json.dumps(event) + "\n").encode())
-
     guard = Guard(candidate, report)
     sys.addaudithook(guard)
     sys.meta_path.insert(0, _Finder(guard))

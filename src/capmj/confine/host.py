@@ -1,0 +1,176 @@
+"""The jailed side: ``python -m capmj.confine.host``, the only process that runs generated task code.
+
+Started by :class:`capmj.confine.proxy.ConfinedTask` inside the jail (:mod:`capmj.confine.jail`),
+it speaks frames (:mod:`capmj.confine.wire`) on its stdin and stdout and nothing else:
+
+1. Trusted start-up: import the task API (numpy, the protocol, spawn, predicates), move the
+   channel to private descriptors and point descriptors 0 and 1 at ``/dev/null`` (what the task
+   prints goes to stderr, which the parent keeps a bounded tail of), install the seccomp filter
+   (no process, no program, no socket from here on) and the audit-hook guard (an early,
+   explained rejection of what the static check missed; the jail is the boundary, not the guard).
+2. ``load``: the parent sends the module's exact text and its final module name (the name it has
+   once installed, so nothing distinguishes a check from a later run).  The text is compiled here
+   from the string — never from a file, so no ``.pyc`` is ever read — and run; the answer is the
+   task's facts: name, tags, docstring and which protocol methods it has.
+3. Calls: ``sample_scene`` (with the PCG64 state of the caller's generator, returning the scene and
+   the advanced state), ``oracle_goals`` and ``evaluate``; each answer is data, or an error with the
+   exception's class, message and a traceback tail.
+
+A scene this process sampled is kept by its wire text, so a later call about it hands the task
+the very object it made (``info`` keys that JSON would turn into strings stay what the task wrote).
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import os
+import sys
+import traceback
+from types import ModuleType
+from typing import IO, Any
+
+from capmj.confine import wire
+
+_KEPT_SCENES = 64
+CANDIDATE_FILE = "<generated task>"
+"""The file name the module's code carries (in tracebacks, and for the guard: code from here is the task's)."""
+
+
+def _error(e: BaseException) -> dict[str, Any]:
+    tb = traceback.format_exc()
+    return {"error": {"type": type(e).__name__, "message": str(e)[:1000], "traceback": tb[-1500:]}}
+
+
+def _facts(task: Any) -> dict[str, Any]:
+    from capmj.tasks.scene_method import DEPRECATED_SCENE_METHOD, SCENE_METHOD
+
+    tags = getattr(task, "tags", None)
+    new, old = getattr(task, SCENE_METHOD, None), getattr(task, DEPRECATED_SCENE_METHOD, None)
+    return {"name": getattr(task, "name", None) if isinstance(getattr(task, "name", None), str) else None,
+            "tags": sorted(t for t in tags if isinstance(t, str)) if isinstance(tags, (set, frozenset)) else None,
+            "doc": (inspect.getdoc(task) or "")[: wire.MAX_DOC],
+            "methods": {SCENE_METHOD: callable(new), DEPRECATED_SCENE_METHOD: callable(old),
+                        "aliased": callable(new) and old is not None and old == new,
+                        "oracle_goals": callable(getattr(task, "oracle_goals", None)),
+                        "evaluate": callable(getattr(task, "evaluate", None))}}
+
+
+class Host:
+    """The loaded task and the scenes it sampled; one method per request."""
+
+    def __init__(self) -> None:
+        self.task: Any = None
+        self.scenes: dict[str, Any] = {}
+
+    def load(self, msg: dict[str, Any]) -> dict[str, Any]:
+        import inspect as _inspect
+
+        name, text = str(msg["module"]), str(msg["text"])
+        module = ModuleType(name)
+        module.__file__ = CANDIDATE_FILE
+        sys.modules[name] = module
+        exec(compile(text, CANDIDATE_FILE, "exec"), module.__dict__)  # noqa: S102 - inside the jail, by design
+        if not hasattr(module, "TASK"):
+            raise AttributeError("the module defines no TASK object (end it with TASK = YourTask())")
+        task = module.TASK
+        self.task = task() if _inspect.isclass(task) else task
+        return {"facts": _facts(self.task)}
+
+    def _scene(self, v: Any) -> Any:
+        key = json.dumps(v, sort_keys=True)
+        return self.scenes.get(key) or wire.scene_from_wire(v)
+
+    def sample_scene(self, msg: dict[str, Any]) -> dict[str, Any]:
+        import numpy as np
+
+        from capmj.tasks.protocol import Resample
+        from capmj.tasks.scene_method import scene_sampler
+
+        rng = np.random.Generator(np.random.PCG64())
+        rng.bit_generator.state = wire.rng_from_wire(msg["rng"])
+        try:
+            scene = scene_sampler(self.task)(rng)
+        except Resample:
+            return {"resample": True, "rng": wire.rng_to_wire(rng)}
+        from capmj.tasks.protocol import Scene
+
+        if not isinstance(scene, Scene):
+            raise TypeError(f"the scene method returned {type(scene).__name__}, not a Scene")
+        try:
+            data = wire.scene_to_wire(scene)
+            json.dumps(data, allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise TypeError(f"scene.info is not JSON-serialisable ({e})") from None
+        if len(self.scenes) < _KEPT_SCENES:  # keyed as the parent will send it back
+            self.scenes[json.dumps(wire.scene_to_wire(wire.scene_from_wire(json.loads(json.dumps(data)))),
+                                   sort_keys=True)] = scene
+        return {"scene": data, "rng": wire.rng_to_wire(rng)}
+
+    def oracle_goals(self, msg: dict[str, Any]) -> dict[str, Any]:
+        from capmj.tasks.protocol import OracleGoal
+
+        goals = list(self.task.oracle_goals(self._scene(msg["scene"])))
+        bad = [type(g).__name__ for g in goals if not isinstance(g, OracleGoal)]
+        if bad:
+            raise TypeError(f"oracle_goals must return OracleGoal steps, got {', '.join(sorted(set(bad)))}")
+        return {"goals": [wire.goal_to_wire(g) for g in goals]}
+
+    def evaluate(self, msg: dict[str, Any]) -> dict[str, Any]:
+        from capmj.tasks.protocol import Verdict
+
+        v = self.task.evaluate(self._scene(msg["scene"]), wire.state_from_wire(msg["state"]))
+        if not isinstance(v, Verdict):
+            raise TypeError(f"evaluate must return a Verdict, got {type(v).__name__}")
+        return {"verdict": wire.verdict_to_wire(v)}
+
+
+def _private_channel() -> tuple[IO[bytes], IO[bytes]]:
+    """The frame channel on descriptors of its own; 0 and 1 now lead to ``/dev/null``."""
+    inp, out = os.fdopen(os.dup(0), "rb", buffering=0), os.fdopen(os.dup(1), "wb")
+    null = os.open(os.devnull, os.O_RDWR)
+    os.dup2(null, 0)
+    os.dup2(2, 1)  # a task's print goes where stderr goes
+    os.close(null)
+    sys.stdin = open(os.devnull, encoding="utf-8")  # noqa: SIM115 - for the life of the process
+    return inp, out
+
+
+def main() -> int:
+    # trusted start-up: everything the task API needs, before any generated code exists here
+    import numpy  # noqa: F401
+
+    import capmj.tasks.predicates  # noqa: F401
+    import capmj.tasks.protocol  # noqa: F401
+    import capmj.tasks.spawn  # noqa: F401
+    from capmj.confine import guard, seccomp
+
+    inp, out = _private_channel()
+    host = Host()
+    seccomp.install()
+
+    def report(event: dict[str, Any]) -> None:
+        v = event["violation"]
+        wire.write_frame(out, {"violation": {"event": str(v["event"]), "detail": str(v["detail"])[:400]}})
+
+    g = guard.install(CANDIDATE_FILE, report)
+    while True:
+        try:
+            msg = wire.read_frame(inp, wire.MAX_TO_JAIL)
+        except wire.WireError:
+            return 0  # the parent closed the channel
+        op = msg.get("op")
+        g.check = str(op)
+        try:
+            answer = getattr(host, str(op))(msg) if op in ("load", "sample_scene", "oracle_goals", "evaluate") \
+                else {"error": {"type": "WireError", "message": f"unknown op {op!r}", "traceback": ""}}
+        except BaseException as e:  # noqa: BLE001 - the task's failure is the answer
+            answer = _error(e)
+        try:
+            wire.write_frame(out, answer)
+        except (TypeError, ValueError) as e:  # an answer that is not JSON (a task's odd values)
+            wire.write_frame(out, _error(e))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
