@@ -111,6 +111,17 @@ class LLMBudgetExceeded(BudgetExceeded):
     """The episode's LLM calls used more tokens or money than ``episode_max_*`` allows."""
 
 
+class HelperCallsExceeded(LLMBudgetExceeded):
+    """The episode's code called helper LMPs (``parse_obj_name``, ``parse_position``,
+    ``parse_question``, ``parse_function``, a plan's ``parse_completion``) more often than
+    ``episode_max_helper_calls`` allows; refused before the LLM is asked."""
+
+
+class TextBudgetExceeded(BudgetExceeded):
+    """Text made from a plan value (``say``, ``print``, ``str``/``repr``, f-strings, ``format``,
+    ``%``, a helper's return value) would pass its character cap; refused before it is made."""
+
+
 class MotionFailed(AgentError, RuntimeError):
     """A pick-and-place the plan asked for did not happen: ``status`` is the primitive's
     (``unreachable``, ``no_grip``; ``wrong_object`` when it picked another object than asked).
