@@ -151,7 +151,7 @@ def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
                            capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
     assert bench.returncode == 0, bench.stderr
     episodes = [json.loads(x) for x in (run / "episodes.jsonl").read_text().splitlines()]
-    assert [(e["task"], e["success"]) for e in episodes] == [(GOOD, True)]
+    assert [(e["task"], e["success"]) for e in episodes] == [(GOOD, True)], [(e.get("error"), e.get("error_type")) for e in episodes]
 
 
 # --------------------------------------------------------------------------------------- rejections
@@ -159,9 +159,11 @@ def test_good_task_repaired_checked_packaged_installed_and_run(tmp_path):
     # accepted means confined: the manifest names the module's sha256; `tasks check` re-checks it
     manifest = json.loads((out / "capmj_generated_test" / "capmj-confinement.json").read_text())
     module = out / "capmj_generated_test" / "put_blocks_in_zone_of_same_color.py"
-    entry = manifest["modules"]["put_blocks_in_zone_of_same_color.py"]
-    assert entry["sha256"] == hashlib.sha256(module.read_bytes()).hexdigest() and entry["task"] == GOOD
-    assert entry["confinement"]["static"] == ["parse", "imports", "names"]
+    entry = manifest["tasks"][GOOD]
+    assert manifest["files"][entry["module"]] == hashlib.sha256(module.read_bytes()).hexdigest()
+    assert entry["module"] == "put_blocks_in_zone_of_same_color.py" and set(manifest["files"]) == {"__init__.py", entry["module"]}
+    assert entry["confinement"]["static"] == ["parse", "imports", "names"] and entry["confinement"]["jail"]["jail"] == "bwrap"
+    assert entry["facts"]["name"] == GOOD and entry["facts"]["tags"] == ["generated-by-llm"]
     check = subprocess.run([str(py), "-m", "capmj.tasks", "check", GOOD, "--seeds", "1"], capture_output=True,
                            text=True, timeout=300, env=env, cwd=tmp_path)
     assert check.returncode == 0 and "PASS  confinement" in check.stdout, check.stdout + check.stderr
@@ -263,14 +265,14 @@ def test_cli_runs_a_generation_and_prints_verdicts(tmp_path, capsys):
 
 
 def test_runaway_allocation_stopped_by_the_memory_limit(tmp_path):
+    from capmj.confine.proxy import ModuleSource
     from capmj.generate.isolate import run_isolated
     from generator_script import CANDIDATES
 
     code = (CANDIDATES / "good_zone_color.py").read_text().replace(
         "        k = int(rng.integers(2, 4))", "        k = int(np.ones(600_000_000).sum()) % 2 + 2  # 4.8 GB")
-    path = tmp_path / "hog.py"
-    path.write_text(code)
-    run = run_isolated(path, name=GOOD, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
+    run = run_isolated(ModuleSource("capmj_generated_test.hog", code), name=GOOD, seeds=(0,), accept_rate=1.0,
+                       tags=("generated-by-llm",),
                        limits=Limits(cpu_s=60, memory_mb=2048, wall_s=120))
     scenes = {r.name: r for r in run.results}["scenes"]
     assert scenes.outcome == "error" and "MemoryError" in scenes.detail, run

@@ -60,6 +60,14 @@ class ConfinementError(PluginError):
     package changed since it was accepted.  Such code never runs outside the jail."""
 
 
+class GuardRefused(ConfinementError):
+    """The runtime guard in the jail refused an event of generated code (``event``, ``detail``)."""
+
+    def __init__(self, event: str, detail: str) -> None:
+        super().__init__(f"refused by the runtime guard: {detail}")
+        self.event, self.detail = event, detail
+
+
 class ConfinedTaskError(TaskError):
     """LLM-written task code failed inside its jail: it raised (``remote_type`` names the class it
     raised), or a limit of the jail ended it (CPU, memory, wall time)."""

@@ -1,9 +1,12 @@
-"""Confinement of LLM-written task code (issue #25; threat model in ``docs/security.md``).
+"""Confinement of LLM-written task code (threat model in ``docs/security.md``).
 
-Three layers, each stopping what the one before might miss: :mod:`~capmj.confine.names` (a
-static check of the names code may reference, from :mod:`~capmj.confine.allowlist`),
-:mod:`~capmj.confine.guard` (an audit hook in the check worker) and :mod:`~capmj.confine.oslayer`
-(network and mount namespaces, read-only file system).  :mod:`~capmj.confine.manifest` keeps an
-accepted package what was accepted.  This package sits beside ``capmj.tasks`` and imports none
-of capmj at import time.
+The boundary is the operating system: generated code runs only in a jailed process
+(:mod:`~capmj.confine.jail`: bubblewrap namespaces, read-only root, no capabilities, a clean
+environment, rlimits; :mod:`~capmj.confine.seccomp`: no new process or program), started as
+:mod:`~capmj.confine.host` and spoken to as validated data (:mod:`~capmj.confine.wire`) through a
+:class:`~capmj.confine.proxy.ConfinedTask`.  In front of it stand early, explained rejections:
+a static check of the names code may reference (:mod:`~capmj.confine.names`, from
+:mod:`~capmj.confine.allowlist`) and, inside the jail, an audit hook (:mod:`~capmj.confine.guard`).
+:mod:`~capmj.confine.manifest` keeps an accepted package what was accepted.  Importing this package
+imports nothing.
 """

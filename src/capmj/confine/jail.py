@@ -79,10 +79,13 @@ def _readable_roots() -> list[str]:
     return [p for p in existing if not any(p != q and p.startswith(q.rstrip("/") + "/") for q in existing)]
 
 
-def jail_command(argv: Sequence[str], limits: Limits = Limits()) -> list[str]:
+def jail_command(argv: Sequence[str], limits: Limits | None = None) -> list[str]:
     """The ``bwrap`` command line that runs ``argv`` jailed (see the module docstring)."""
-    cmd = [shutil.which(BWRAP) or BWRAP, "--unshare-all", "--unshare-user", "--disable-userns", "--die-with-parent", "--new-session", "--cap-drop", "ALL",
-           "--uid", str(NOBODY), "--gid", str(NOBODY), "--clearenv"]
+    limits = limits or Limits()
+    cmd = [shutil.which(BWRAP) or BWRAP, "--unshare-all", "--unshare-user", "--disable-userns", "--die-with-parent",
+           "--new-session", "--cap-drop", "ALL", "--uid", str(NOBODY), "--gid", str(NOBODY), "--clearenv",
+           "--proc", "/proc", "--dev", "/dev", "--size", str(limits.tmpfs_mb << 20), "--tmpfs", TMP]
+    # the binds come after the tmpfs: an interpreter or venv under /tmp stays visible (read-only)
     for link in _SYSTEM_LINKS:
         if os.path.islink(link):
             cmd += ["--symlink", os.readlink(link), link]
@@ -92,8 +95,7 @@ def jail_command(argv: Sequence[str], limits: Limits = Limits()) -> list[str]:
         cmd += ["--ro-bind", path, path]
     if os.path.exists("/etc/ld.so.cache"):
         cmd += ["--ro-bind", "/etc/ld.so.cache", "/etc/ld.so.cache"]
-    cmd += ["--proc", "/proc", "--dev", "/dev", "--size", str(limits.tmpfs_mb << 20), "--tmpfs", TMP,
-            "--remount-ro", "/", "--chdir", TMP]
+    cmd += ["--remount-ro", "/", "--chdir", TMP]
     for key, value in CLEAN_ENV.items():
         cmd += ["--setenv", key, value]
     return [*cmd, "--", *argv]

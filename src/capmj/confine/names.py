@@ -14,7 +14,9 @@ leaves open:
 3. **Doors by name**: the modules and functions that reach the operating system or the
    interpreter (``os``, ``sys``, ``subprocess``, ``importlib``, ``builtins``, ``ctypes`` …) are
    refused as identifiers and attributes anywhere, as are dunder attributes, reflection and I/O
-   builtins, and the attributes of frames, tracebacks and file writers.
+   builtins, and the attributes of frames, tracebacks, coroutines and file writers — also where a
+   ``match`` class pattern reads them (``case object(__globals__=g)``) or a format string does
+   (``"{0.__globals__}".format(f)``).
 
 Each finding names the line and the door, so a repair prompt can say exactly what to change.
 """
@@ -22,6 +24,7 @@ Each finding names the line and the door, so a repair prompt can say exactly wha
 from __future__ import annotations
 
 import ast
+import string
 from dataclasses import dataclass
 
 from capmj.confine.allowlist import IMPORTABLE, is_module, members
@@ -46,7 +49,7 @@ FORBIDDEN_ATTRIBUTES = frozenset({
     "tofile", "dump", "dumps", "ctypes", "load", "loads", "save", "savez", "savez_compressed",
     "savetxt", "loadtxt", "genfromtxt", "fromfile", "memmap", "gi_frame", "gi_code", "ag_frame",
     "cr_frame", "f_globals", "f_locals", "f_builtins", "f_back", "f_code", "f_trace",
-    "tb_frame", "tb_next", "mro",
+    "tb_frame", "tb_next", "mro", "cr_code", "ag_code", "cr_await", "gi_yieldfrom", "co_code", "co_consts",
 })
 """Rejected on any object: file I/O, pickling, raw memory and frame access (shared with the plan
 sandbox, :mod:`capmj.agents.sandbox.checks`)."""
@@ -126,6 +129,22 @@ def _follow(name: ast.Name, module: str, parents: dict[ast.AST, ast.AST]) -> Fin
         return Finding(name.lineno, f"{written} ({path}) is not part of the task API{hint}")
 
 
+def _format_finding(call: ast.Call) -> Finding | None:
+    """``"{0.attr}".format(x)`` / ``format_map``: a replacement field that reads an attribute or an
+    item reaches what no attribute check sees (``{0.__globals__[os]}``)."""
+    f = call.func
+    if not (isinstance(f, ast.Attribute) and f.attr in ("format", "format_map")):
+        return None
+    if not (isinstance(f.value, ast.Constant) and isinstance(f.value.value, str)):
+        return Finding(call.lineno, f".{f.attr}() on a computed string is not allowed in a task; use an f-string")
+    try:
+        fields = [name for _, name, _, _ in string.Formatter().parse(f.value.value) if name]
+    except ValueError:
+        return Finding(call.lineno, "a malformed format string")
+    deep = [n for n in fields if "." in n or "[" in n]
+    return Finding(call.lineno, f"the format field {{{deep[0]}}} reads an attribute or item; use an f-string") if deep else None
+
+
 def name_findings(tree: ast.AST) -> list[Finding]:
     """Rules 2 and 3 (run after :func:`import_findings` found nothing)."""
     aliases: dict[str, str] = {}
@@ -149,6 +168,12 @@ def name_findings(tree: ast.AST) -> list[Finding]:
                 bad.append(Finding(node.lineno, f"attribute {a!r} is a door to the operating system"))
             elif (a.startswith("__") and a not in DUNDER_OK) or a in FORBIDDEN_ATTRIBUTES:
                 bad.append(Finding(node.lineno, f"attribute {a!r} is not allowed in a task"))
+        elif isinstance(node, ast.MatchClass):  # `case C(attr=p)` reads C's attribute `attr`
+            for a in node.kwd_attrs:
+                if a in DOORS or (a.startswith("__") and a not in DUNDER_OK) or a in FORBIDDEN_ATTRIBUTES:
+                    bad.append(Finding(node.lineno, f"the class pattern reads the attribute {a!r}, not allowed in a task"))
+        elif isinstance(node, ast.Call) and (f := _format_finding(node)) is not None:
+            bad.append(f)
         elif isinstance(node, ast.alias):
             for part in (node.asname or "", *node.name.split(".")):
                 if part in DOORS:

@@ -38,7 +38,7 @@ import numpy as np
 
 from capmj.confine import jail, wire
 from capmj.confine.guard import VIOLATION_EXIT
-from capmj.errors import ConfinedTaskError, ConfinementError
+from capmj.errors import ConfinedTaskError, ConfinementError, GuardRefused
 from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.scene_method import DEPRECATED_SCENE_METHOD, SCENE_METHOD
@@ -175,10 +175,9 @@ class _Jailed:
             self.kill()
             raise
         if "violation" in answer:
-            v = answer["violation"]
+            v = answer["violation"] if isinstance(answer["violation"], dict) else {}
             self.kill()
-            detail = str(v.get("detail", "")) if isinstance(v, dict) else str(v)
-            raise ConfinementError(f"refused by the runtime guard: {detail[:400]}")
+            raise GuardRefused(str(v.get("event", "?"))[:100], str(v.get("detail", ""))[:400])
         if "error" in answer:
             e = answer["error"] if isinstance(answer["error"], dict) else {}
             kind, message = str(e.get("type", "Error"))[:80], str(e.get("message", ""))[:1000]
@@ -228,11 +227,18 @@ class ConfinedTask:
     ``expected`` are the facts accepted at generation (from a manifest): the task's ``name``,
     ``tags`` and docstring come from them without starting a process, and a process that states
     different facts is refused.  Without them, the first access to a fact loads the module.
+    ``spare=False`` starts no spare process (one process at a time, each episode waits for its own).
     """
 
-    def __init__(self, source: ModuleSource, limits: jail.Limits = jail.Limits(), *,
-                 expected: TaskFacts | None = None, spare: bool = True) -> None:
-        self.source, self.limits, self.expected, self.use_spare = source, limits, expected, spare
+    name: str
+    """The name the task states (a malformed one is kept as stated, for validation to report)."""
+    tags: frozenset[str]
+
+    def __init__(self, source: ModuleSource, limits: jail.Limits | None = None, *,
+                 expected: TaskFacts | None = None, sample_goal: str | None = None, spare: bool = True) -> None:
+        self.source, self.limits, self.expected, self.use_spare = source, limits or jail.Limits(), expected, spare
+        self.sample_goal = sample_goal
+        """A goal text recorded at acceptance (for listings that must not start a process)."""
         self._lock = threading.RLock()
         self._current: _Jailed | None = None
         self._spare: _Jailed | None = None
@@ -240,6 +246,8 @@ class ConfinedTask:
         self._live: list[_Jailed] = []
         self.started = 0
         """How many jailed processes this task has started (one per episode, plus spares)."""
+        self.refusals: list[dict[str, str]] = []
+        """The events the runtime guard refused (``event``, ``detail``), in order."""
         self._finalizer = weakref.finalize(self, _close_all, self._live)
         if expected is not None:
             self._present(expected)
@@ -287,7 +295,14 @@ class ConfinedTask:
         if self._current is None:
             self._current = self._spare or self._spawn()
             self._spare = None
-            facts = self._current.hello()
+            try:
+                facts = self._current.hello()
+            except (ConfinementError, ConfinedTaskError) as e:
+                if isinstance(e, GuardRefused):
+                    self.refusals.append({"event": e.event, "detail": e.detail})
+                self._retire(self._current)
+                self._current = None
+                raise
             if self.expected is not None and facts != self.expected:
                 self._retire(self._current)
                 self._current = None
@@ -305,6 +320,11 @@ class ConfinedTask:
         p = self._process()
         try:
             return p.call(message)
+        except GuardRefused as e:
+            self.refusals.append({"event": e.event, "detail": e.detail})
+            self._retire(p)
+            self._current = None
+            raise
         except (ConfinementError, ConfinedTaskError):
             if p.proc.poll() is not None or p.proc.returncode is not None:
                 self._retire(p)

@@ -7,10 +7,10 @@ Stages (the record's ``stage`` is the last one reached; ``accepted`` only after 
 2. ``examples``: the LLM picks the 2 installed tasks most like the proposal.
 3. ``write``: it receives their source and writes the module (the task API is in the system
    message, :func:`system_prompt`).
-4. ``static``: parse, import allow-list, forbidden names (AST only, nothing runs), then in the
-   limited worker: import and the registry's validation (``load``, ``protocol``).  One repair
+4. ``static``: parse, import allow-list, forbidden names (AST only, nothing runs), then with the
+   code in the jail: load and the registry's validation (``load``, ``protocol``).  One repair
    round on failure, with the error or traceback.
-5. ``runtime``: the remaining checker checks in the same limited worker.
+5. ``runtime``: the remaining checker checks, computed here from the jailed task's answers.
 6. ``reflection``: the LLM votes on the task against the acceptance criteria.  The vote is
    recorded; an ``accept`` vote never accepts a task by itself (the checks must pass first), a
    ``reject`` vote (duplicate, not feasible, not interesting) rejects it.
@@ -18,7 +18,6 @@ Stages (the record's ``stage`` is the last one reached; ``accepted`` only after 
 
 from __future__ import annotations
 
-import hashlib
 import json
 import time
 from dataclasses import dataclass, field
@@ -29,6 +28,7 @@ from capmj.errors import CapmjError
 from capmj.generate import prompts
 from capmj.generate.config import GENERATED_TAG, NAME_RE, GenerateConfig
 from capmj.generate.conversation import Conversation
+from capmj.confine.proxy import ModuleSource
 from capmj.generate.isolate import run_isolated
 from capmj.generate.library import LibraryTask, api_reference, similar
 from capmj.confine.allowlist import allowed_imports_text
@@ -64,10 +64,14 @@ class CandidateRecord:
     conversation: str | None = None
     goals: list[str] = field(default_factory=list)
     confinement: dict[str, Any] = field(default_factory=dict)
-    """How the accepted attempt was confined: the static check, the guard, the OS layer, the sha256."""
+    """How the accepted attempt was confined: the static check, the guard, the jail, the sha256."""
+    facts: dict[str, Any] | None = None
+    """What the accepted task stated in the jail (name, tags, docstring, methods): the manifest's copy."""
+    text: str | None = field(default=None, repr=False)
+    """The exact text the accepted attempt's checks were run on; the package is built from it."""
 
     def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        return {k: v for k, v in self.__dict__.items() if k != "text"}
 
     def check(self, stage: str, attempt: int, r: CheckResult) -> None:
         self.checks.append({"stage": stage, "attempt": attempt, **r.to_dict()})
@@ -179,8 +183,9 @@ def _checked(ctx: Context, conv: Conversation, rec: CandidateRecord, code: str) 
         for r in static:
             rec.check("static", attempt, r)
         bad, run = _failure(static), None
-        if bad is None:  # only now does the code run: in the limited worker
-            run = run_isolated(path, name=name, seeds=tuple(range(cfg.seeds)), accept_rate=cfg.accept_rate,
+        source = ModuleSource(cfg.module_of(name), code)  # what runs, what is hashed, what is packaged
+        if bad is None:  # only now does the code run: in the jail
+            run = run_isolated(source, name=name, seeds=tuple(range(cfg.seeds)), accept_rate=cfg.accept_rate,
                                tags=(GENERATED_TAG,), limits=cfg.limits)
             rec.wall_s["checks"] = rec.wall_s.get("checks", 0.0) + run.wall_s
             for r in run.results:
@@ -209,7 +214,8 @@ def _checked(ctx: Context, conv: Conversation, rec: CandidateRecord, code: str) 
             rec.reason = f"runtime check {bad.name}: {bad.detail}"
             return None
         rec.confinement = {"static": [r.name for r in static], "guard": "audit hook, no event refused",
-                           "os_layer": run.os_layer, "sha256": hashlib.sha256(code.encode()).hexdigest()}
+                           "jail": run.jail, "sha256": source.sha256}
+        rec.facts, rec.text = run.facts, source.text
         return attempt
     return None  # pragma: no cover - the loop always returns
 

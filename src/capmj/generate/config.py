@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
+from capmj.confine.jail import Limits
 from capmj.confine.manifest import GENERATED_TAG
 from capmj.errors import ConfigError
 from capmj.llm.config import DEFAULT_TIMEOUT_S
@@ -25,20 +26,6 @@ _PACKAGE_RE = re.compile(r"^[a-z][a-z0-9]*([-_][a-z0-9]+)*$")
 def default_package() -> str:
     """``capmj-generated-<date>`` (UTC)."""
     return f"capmj-generated-{_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d}"
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Resources of the worker process that runs generated code: CPU seconds (``RLIMIT_CPU``),
-    address space in MiB (``RLIMIT_AS``) and wall seconds (killed after)."""
-
-    cpu_s: int = 300
-    memory_mb: int = 4096
-    wall_s: float = 600.0
-
-    def __post_init__(self) -> None:
-        if self.cpu_s < 1 or self.memory_mb < 256 or self.wall_s <= 0:
-            raise ConfigError(f"limits need cpu_s >= 1, memory_mb >= 256, wall_s > 0; got {self}")
 
 
 @dataclass(frozen=True)
@@ -93,5 +80,14 @@ class GenerateConfig:
         """The Python package of the plugin (``capmj-generated-x`` -> ``capmj_generated_x``)."""
         return self.package.replace("-", "_")
 
+    def module_of(self, task_name: str) -> str:
+        """The dotted module a task runs under, at its checks and once installed alike."""
+        return f"{self.import_name}.{module_name(task_name)}"
 
-__all__ = ["GENERATED_TAG", "GenerateConfig", "Limits", "MODES", "NAME_RE", "default_package"]
+
+def module_name(task_name: str) -> str:
+    """The module (file stem) of a generated task: its kebab-case name in snake case."""
+    return task_name.replace("-", "_")
+
+
+__all__ = ["GENERATED_TAG", "GenerateConfig", "Limits", "MODES", "NAME_RE", "default_package", "module_name"]

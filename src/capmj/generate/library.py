@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from types import ModuleType
 
 from capmj.confine.allowlist import CAPMJ_API, ordered_members
+from capmj.confine.proxy import ConfinedTask
 from capmj.errors import CapmjError
 from capmj.generate.examples import NotSelfContained, self_contained
 from capmj.tasks import registry
@@ -43,14 +44,18 @@ def load_library() -> tuple[LibraryTask, ...]:
     for info in registry.list_tasks():
         try:
             task = registry.get_task(info.name)
-            goal = make_scene(task, 0).goal
+            # an LLM-written task: its goal as recorded at acceptance (listing starts no jailed process)
+            goal = task.sample_goal or "" if isinstance(task, ConfinedTask) else make_scene(task, 0).goal
         except (CapmjError, Exception):  # noqa: BLE001 - a broken plugin is not an example
             continue
         doc = inspect.getdoc(task) or ""
         summary = doc.strip().splitlines()[0] if doc.strip() else ""
         module = sys.modules.get(type(task).__module__)
         try:
-            example = self_contained(inspect.getsource(module)) if module is not None else ""
+            if isinstance(task, ConfinedTask):  # its verified text, read as text
+                example = self_contained(task.source.text)
+            else:
+                example = self_contained(inspect.getsource(module)) if module is not None else ""
         except (OSError, TypeError, SyntaxError, NotSelfContained):  # shown only if it can be shown right
             example = ""
         out.append(LibraryTask(info.name, goal, summary, example[:MAX_SOURCE_CHARS]))

@@ -5,7 +5,9 @@ rejected before anything runs.  What a task may import and reference is the allo
 names in :mod:`capmj.confine.allowlist`, checked by :mod:`capmj.confine.names`; this module
 wraps those findings as the generator's ``parse``/``imports``/``names`` check results.
 Execution (and with it the registry's validation of the task object) happens only in the
-confined worker process.
+jail (:mod:`capmj.confine.jail`).  A module the compiler itself cannot take (``RecursionError`` on
+a 1 200-term sum, ``MemoryError``, NUL bytes) fails ``parse`` with its reason: a candidate never
+crashes the generator.
 """
 
 from __future__ import annotations
@@ -117,8 +119,23 @@ def static_checks(code: str) -> tuple[CheckResult, ...]:
     except SyntaxError as e:
         msg = f"SyntaxError: {e.msg} (line {e.lineno})" + (f": {e.text.strip()}" if e.text else "")
         msg += _lines_before(code, e.lineno)
-        return (CheckResult("parse", "fail", msg), CheckResult("imports", "skip"), CheckResult("names", "skip"))
+        return _parse_failed(msg)
+    except (RecursionError, MemoryError, ValueError) as e:  # nested too deeply for the compiler, NUL bytes ...
+        return _parse_failed(f"{type(e).__name__}: the code cannot be compiled ({str(e)[:120] or 'no message'}); "
+                             "write shorter expressions and shallower nesting")
     out = [CheckResult("parse", "pass", f"{len(code.splitlines())} lines")]
+    try:
+        return _names(tree, out)
+    except (RecursionError, MemoryError) as e:  # the checks walk the tree recursively too
+        return (*out, CheckResult("imports", "fail", f"{type(e).__name__}: the code is nested too deeply to check"),
+                CheckResult("names", "skip"))
+
+
+def _parse_failed(msg: str) -> tuple[CheckResult, ...]:
+    return (CheckResult("parse", "fail", msg), CheckResult("imports", "skip"), CheckResult("names", "skip"))
+
+
+def _names(tree: ast.AST, out: list[CheckResult]) -> tuple[CheckResult, ...]:
     bad = import_findings(tree)
     out.append(CheckResult("imports", "fail", f"{'; '.join(map(str, bad))}; a task may import only "
                                               f"{', '.join(IMPORTABLE)} (and only their listed names)") if bad

@@ -15,9 +15,11 @@ Why it works this way:
   what success means; a warning scrolls by unseen in a run of hundreds of episodes, and the fix
   is three headings.
 * A package written by the task generator (it ships a confinement manifest, or its distribution
-  has the keyword ``generated-by-llm``) is re-checked before it is imported: unchanged since
-  acceptance and passing the static confinement check (:mod:`capmj.confine.manifest`), else a
-  :class:`~capmj.errors.ConfinementError` and nothing of it runs.
+  has the keyword ``generated-by-llm``) is never imported: it is re-checked (every file unchanged
+  since acceptance, every module passing the static confinement check, else a
+  :class:`~capmj.errors.ConfinementError` and nothing of it runs) and then answered by a jailed
+  process (:func:`capmj.confine.manifest.confined_task`); its name, tags and docstring come from
+  the manifest, so listing and tag selection start no process.
 * A task written before ``generate`` became ``sample_scene`` still loads (it warns when it first
   samples a scene); one defining both as different methods is a :class:`PluginError`
   (:mod:`capmj.tasks.scene_method` says why).
@@ -39,7 +41,7 @@ from dataclasses import dataclass, field
 from importlib import metadata
 from typing import TYPE_CHECKING, Any, Sequence
 
-from capmj.confine.manifest import confinement_problems
+from capmj.confine.manifest import confined_task, confinement_problems
 from capmj.errors import ConfigError, ConfinementError, PluginError
 from capmj.tasks.builtin import RENAMED_TAGS
 from capmj.tasks.scene_method import SCENE_METHOD, scene_method_problem, uses_deprecated_name
@@ -205,13 +207,16 @@ class TaskRegistry:
             info = scan.entries[name]
             where = f"task plugin {name!r} from {info.distribution} {info.version} ({info.value})"
             problems = confinement_problems(scan.points[name])
-            if problems:  # LLM-written code changed since acceptance: never import it
+            if problems:  # LLM-written code changed since acceptance: it never runs, not even jailed
                 self._failed[name] = ConfinementError(
                     f"{where} is LLM-written and fails its confinement check, so it is not imported: "
                     f"{'; '.join(problems[:5])}")
                 raise self._failed[name]
             try:
-                task = _instantiate(scan.points[name].load())
+                if problems is None:
+                    task = _instantiate(scan.points[name].load())
+                else:  # LLM-written: never imported here, answered by a jailed process
+                    task = confined_task(scan.points[name])
             except Exception as e:  # anything a foreign module raises at import must stay contained
                 self._failed[name] = PluginError(f"{where} failed to load: {type(e).__name__}: {e}")
                 raise self._failed[name] from e
