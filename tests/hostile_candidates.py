@@ -21,6 +21,8 @@ from typing import Any
 
 GOOD = Path(__file__).resolve().parent / "generator_candidates" / "good_zone_color.py"
 NAME = "put-blocks-in-zone-of-same-color"
+MODULE = "capmj_generated_hostile.put_blocks_in_zone_of_same_color"
+"""The module name the candidate runs under (as it would once installed)."""
 _AFTER_IMPORTS = "from capmj.tasks.spawn import Spawner, pick_colors\n"
 _SAMPLE_SCENE = "    def sample_scene(self, rng: np.random.Generator) -> Scene:\n"
 
@@ -33,6 +35,10 @@ class Hostile:
     static: str
     events: tuple[str, ...]
     where: str = "import"
+    stops: str = "guard"
+    """The layer that stops it once the static check is bypassed: ``guard`` (the audit hook names the
+    event), ``jail`` (the guard does not see it or is switched off; the OS boundary holds), ``wire``
+    (what it sends is not a valid message)."""
 
     def module(self, marker: Path, victim: Path, port: int) -> str:
         """The candidate's source with this door's lines in place."""
@@ -46,11 +52,12 @@ class Hostile:
 
 
 _TYPING_OS = 'import typing\n_os = typing.sys.modules["os"]\n'
+_BUILTINS = 'import typing\n_b = typing.sys.modules["builtins"]\n'
 _IMPORTLIB = 'import typing\n_il = typing.sys.modules["importlib"]\n'
 
 CORPUS: tuple[Hostile, ...] = (
     Hostile("registry-os-system", "process", 'from capmj.tasks import registry as _r\n_r.os.system("touch MARKER")',
-            "capmj.tasks.registry", ("os.system",)),
+            "capmj.tasks.registry", ("import", "os.system")),
     Hostile("typing-sys-modules", "process", 'import typing\ntyping.sys.modules["os"].system("touch MARKER")',
             "typing.sys", ("os.system",)),
     Hostile("dataclasses-sys-posix-spawn", "process",
@@ -60,7 +67,7 @@ CORPUS: tuple[Hostile, ...] = (
             ("os.system",)),
     Hostile("registry-importlib-subprocess", "process",
             'from capmj.tasks import registry as _r\n_r.importlib.import_module("subprocess").run(["touch", "MARKER"])',
-            "capmj.tasks.registry", ("subprocess.Popen",)),
+            "capmj.tasks.registry", ("import", "subprocess.Popen")),
     Hostile("raw-os-open-write", "file", _TYPING_OS + '_fd = _os.open("MARKER", _os.O_WRONLY | _os.O_CREAT)\n'
             '_os.write(_fd, b"owned")', "typing.sys", ("open",)),
     Hostile("in-sample-scene", "process", 'import typing\ntyping.sys.modules["os"].system("touch MARKER")',
@@ -93,18 +100,18 @@ CORPUS: tuple[Hostile, ...] = (
             'import numpy as np\nnp.ctypeslib.load_library("libc.so.6", "/usr/lib/x86_64-linux-gnu").system(b"touch MARKER")',
             "np.ctypeslib", ("ctypes.",)),
     Hostile("socket-connect", "network",
-            'import typing\n_s = typing.sys.modules["socket"]\n_s.create_connection(("127.0.0.1", PORT), timeout=2)'
-            '.sendall(b"owned")', "typing.sys", ("socket.",)),
-    Hostile("dns-lookup", "network", 'import typing\ntyping.sys.modules["socket"].getaddrinfo("owned.example", 80)',
-            "typing.sys", ("socket.",)),
+            _BUILTINS + '_s = _b.__import__("socket")\n_s.create_connection(("127.0.0.1", PORT), timeout=2)'
+            '.sendall(b"owned")', "typing.sys", ("import", "socket.")),
+    Hostile("dns-lookup", "network", _BUILTINS + '_b.__import__("socket").getaddrinfo("owned.example", 80)',
+            "typing.sys", ("import", "socket.")),
     Hostile("import-module-new", "import", _IMPORTLIB + '_il.import_module("ftplib")', "typing.sys", ("import",)),
     Hostile("os-fork", "process", _TYPING_OS + 'if _os.fork() == 0:\n    _os.system("touch MARKER")\n    _os._exit(0)',
             "typing.sys", ("os.fork",)),
     Hostile("os-execv", "process", _TYPING_OS + '_os.execv("/usr/bin/touch", ["touch", "MARKER"])', "typing.sys",
             ("os.exec",)),
     Hostile("signal-parent", "process", _TYPING_OS + "_os.kill(_os.getppid(), 0)", "typing.sys", ("os.kill",)),
-    Hostile("raise-rlimit", "limits", 'import typing\n_res = typing.sys.modules["resource"]\n'
-            "_res.setrlimit(_res.RLIMIT_CPU, (-1, -1))", "typing.sys", ("resource.setrlimit",)),
+    Hostile("raise-rlimit", "limits", _BUILTINS + '_res = _b.__import__("resource")\n'
+            "_res.setrlimit(_res.RLIMIT_CPU, (-1, -1))", "typing.sys", ("import", "resource.setrlimit")),
     Hostile("pathlib-write", "file", 'import typing\ntyping.sys.modules["pathlib"].Path("MARKER").write_text("owned")',
             "typing.sys", ("open",)),
     Hostile("numpy-save", "file", 'import numpy as np\nnp.save("MARKER", np.zeros(3))', "np.save", ("open",)),
@@ -113,9 +120,9 @@ CORPUS: tuple[Hostile, ...] = (
             'import typing\ntyping.sys.modules["atexit"].register(typing.sys.modules["os"].system, "touch MARKER")',
             "'system'", ("os.system",)),
     Hostile("patch-trusted-runner", "process",
-            'import typing\n_run = typing.sys.modules["capmj.runner"]\n_orig = _run.run_episode\n'
+            _BUILTINS + '_run = _b.__import__("capmj.runner", fromlist=["run_episode"])\n_orig = _run.run_episode\n'
             'def _evil(*a, **k):\n    typing.sys.modules["os"].system("touch MARKER")\n    return _orig(*a, **k)\n'
-            "_run.run_episode = _evil", "typing.sys", ("os.system",)),
+            "_run.run_episode = _evil", "typing.sys", ("import",)),
     Hostile("thread-deferred", "process",
             'import typing\n_t = typing.sys.modules["threading"].Thread(target=typing.sys.modules["os"].system, '
             'args=("touch MARKER",))\n_t.start()\n_t.join()', "typing.sys", ("os.system",)),
@@ -128,7 +135,39 @@ CORPUS: tuple[Hostile, ...] = (
             '            _os.write(_fd, (\'{"result": {"name": "\' + _n + \'", "outcome": "pass", "detail": "forged"}}\\n\').encode())\n'
             '        except OSError:\n'
             '            pass\n'
-            '_os._exit(0)', "typing.sys", ()),
+            '_os._exit(0)', "typing.sys", (), stops="wire"),
+    # --- issue #45: the doors that got past the in-interpreter layers -------------------------------
+    Hostile("write-without-audit-event", "file", _TYPING_OS + '_os.mknod("MARKER")', "typing.sys", (), stops="jail"),
+    Hostile("guard-switched-off", "file",
+            'import typing\nfor _f in typing.sys.meta_path:\n    if hasattr(_f, "guard"):\n        _f.guard._busy = True\n'
+            'typing.sys.modules["builtins"].open("MARKER", "w").write("owned")', "typing.sys", (), stops="jail"),
+    Hostile("rebuilt-code-object", "file",
+            'import typing\nasync def _t():\n    opan("MARKER", "w").write("owned")\n_c = _t()\n'
+            '_code = _c.cr_code.replace(co_names=tuple("open" if n == "opan" else n for n in _c.cr_code.co_names))\n'
+            '_c.close()\n_f = type(_t)(_code, globals())\n_c2 = _f()\ntry:\n    _c2.send(None)\nexcept StopIteration:\n'
+            '    pass', "'cr_code'", ("open",)),
+    Hostile("match-keyword-read", "process",
+            'match print:\n    case object(__self__=_b):\n        _b.__import__("os").system("touch MARKER")',
+            "class pattern", ("os.system",)),
+    Hostile("sleeper-module-name", "process",
+            'if not __name__.startswith("capmj_candidate_"):\n    import typing\n'
+            '    typing.sys.modules["os"].system("touch MARKER")', "typing.sys", ("os.system",)),
+    Hostile("post-check-rewrite", "integrity", _BUILTINS + '_b.open("VICTIM", "w").write("rewritten after the checks")',
+            "typing.sys", ("open",)),
+    Hostile("planted-pyc", "integrity", _TYPING_OS + '_os.makedirs("MARKER/__pycache__")\n'
+            '_b = typing.sys.modules["builtins"]\n'
+            '_b.open("MARKER/__pycache__/t.cpython-311.pyc", "wb").write(b"\\x00" * 16)', "typing.sys", ("os.mkdir",)),
+    Hostile("orphan-process", "process", _TYPING_OS + 'if _os.fork() == 0:\n    while True:\n        pass',
+            "typing.sys", ("os.fork",)),
+    Hostile("format-string-environ", "secret",
+            'import typing\ndef _f():\n    pass\n'
+            'raise ValueError("{0.__globals__[typing].sys.modules[os].environ}".format(_f))', "format field", (),
+            stops="jail"),
+    Hostile("reduce-hook-patch", "integrity",
+            'import dataclasses\nimport capmj.tasks.predicates as _P\nclass _Hook:\n'
+            '    def __reduce_ex__(self, protocol):\n        _P.in_zone = lambda *a, **k: True\n        return (int, ())\n'
+            '@dataclasses.dataclass\nclass _D:\n    x: object\ndataclasses.asdict(_D(_Hook()))', "assigns into the module",
+            (), stops="jail"),
 )
 """The corpus; ``events == ()`` marks what the runtime layer alone does not stop."""
 
@@ -149,9 +188,11 @@ def processes_mentioning(token: str) -> list[str]:
 
 
 def run_hostile(hostile: Hostile, folder: Path, **layers: bool) -> tuple[Any, list[str]]:
-    """Check ``hostile`` in the real worker (static check bypassed; ``layers`` as for
-    ``run_isolated``) inside ``folder``; returns the run and every trace its door left."""
-    from capmj.generate.config import Limits
+    """Check ``hostile`` with its code in the jail (static check bypassed; ``layers`` as for
+    ``run_isolated``: ``guarded=False`` leaves the audit hook out) with ``folder`` as the place its
+    door aims at; returns the run and every trace the door left on the host."""
+    from capmj.confine.jail import Limits
+    from capmj.confine.proxy import ModuleSource
     from capmj.generate.isolate import run_isolated
 
     victim = folder / "victim"
@@ -160,18 +201,18 @@ def run_hostile(hostile: Hostile, folder: Path, **layers: bool) -> tuple[Any, li
         srv.bind(("127.0.0.1", 0))
         srv.listen()
         srv.setblocking(False)
-        path = folder / "candidate.py"
-        path.write_text(hostile.module(folder / "marker", victim, srv.getsockname()[1]))
-        run = run_isolated(path, name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
-                           limits=Limits(cpu_s=60, wall_s=120), **layers)
+        code = hostile.module(folder / "marker", victim, srv.getsockname()[1])
+        run = run_isolated(ModuleSource(MODULE, code), name=NAME, seeds=(0,), accept_rate=1.0,
+                           tags=("generated-by-llm",), limits=Limits(cpu_s=60, wall_s=120), **layers)
         try:
             srv.accept()
             connected = ["a connection reached the listening socket"]
         except BlockingIOError:
             connected = []
-    traces = [p.name for p in folder.iterdir() if p.name not in ("victim", "candidate.py")]
+    traces = [p.name for p in folder.iterdir() if p.name not in ("victim",)]
     traces += [] if victim.exists() else ["the victim file was removed"]
+    traces += [] if not victim.exists() or victim.read_text() == "keep me" else ["the victim file was rewritten"]
     return run, traces + connected + processes_mentioning(str(folder))
 
 
-__all__ = ["BY_ID", "CORPUS", "GOOD", "Hostile", "NAME", "processes_mentioning", "run_hostile"]
+__all__ = ["BY_ID", "CORPUS", "GOOD", "Hostile", "MODULE", "NAME", "processes_mentioning", "run_hostile"]

@@ -1,10 +1,12 @@
 """Confinement of LLM-written task code (issue #25): each layer on its own, against a hostile corpus.
 
 The corpus (``tests/hostile_candidates.py``) is the good candidate with one door to the operating
-system added.  Every module must be refused by the static check with a message naming its door;
-fed to the real check worker with the static check bypassed, the runtime guard must stop it with
-the event recorded and leave no file, process or connection behind; where Linux allows
-namespaces, the OS layer alone must keep files and network untouched.
+system added.  Every module must be refused by the static check with a message naming its door.
+Checked with the static check bypassed, its code runs in the jail: the runtime guard there names
+the event where it can see one; with the guard switched off (as code that reached the interpreter
+could), the jail alone leaves no file, process or connection behind on the host; what the guard
+cannot see at all (a write without an audit event, forged frames, a read of the environment, a
+patched shared module) is stopped by the jail or the wire.
 """
 
 from __future__ import annotations
@@ -101,17 +103,18 @@ def test_write_detection_reads_modes_and_flags():
     assert not opens_for_writing(("f", "r", os.O_RDONLY | os.O_CLOEXEC)) and not opens_for_writing(("f", "rb", 0))
 
 
-# --------------------------------------------------------------------------------------- runtime layer
-RUNTIME_SAMPLE = ("registry-os-system", "in-sample-scene", "raw-os-open-write", "remove-victim", "socket-connect",
-                  "ctypes-libc-system", "import-module-new", "os-fork", "atexit-deferred", "patch-trusted-runner",
-                  "exec-spoofed-filename")
-"""One module per door class (the full corpus runs in ``benchmarks/confinement.py``)."""
+# --------------------------------------------------------------------------------------- the guard, the jail
+GUARD_SAMPLE = ("registry-os-system", "in-sample-scene", "raw-os-open-write", "remove-victim", "socket-connect",
+                "ctypes-libc-system", "import-module-new", "os-fork", "patch-trusted-runner", "exec-spoofed-filename",
+                "match-keyword-read", "rebuilt-code-object", "sleeper-module-name", "post-check-rewrite")
+"""One module per door class the guard names (the full corpus runs in ``benchmarks/confinement.py``)."""
 
 
-@pytest.mark.parametrize("hostile_id", RUNTIME_SAMPLE)
-def test_runtime_guard_alone_stops_the_door_and_records_the_event(hostile_id, tmp_path):
+@pytest.mark.parametrize("hostile_id", GUARD_SAMPLE)
+def test_the_guard_in_the_jail_names_the_door_and_nothing_reaches_the_host(hostile_id, tmp_path):
     hostile = BY_ID[hostile_id]
-    run, traces = run_hostile(hostile, tmp_path, os_layer=False)
+    assert hostile.stops == "guard"
+    run, traces = run_hostile(hostile, tmp_path)
     assert run.violation is not None, (hostile.id, run.ended, run.results)
     assert run.violation["event"].startswith(hostile.events), run.violation
     assert traces == [], traces
@@ -122,30 +125,72 @@ def test_runtime_guard_alone_stops_the_door_and_records_the_event(hostile_id, tm
         assert failed[0].name == "scenes"
 
 
-def test_runtime_guard_passes_the_good_candidate(tmp_path):
+def test_the_guard_passes_the_good_candidate(tmp_path):
     good = Hostile("none", "none", "", "", ())
     run, traces = run_hostile(good, tmp_path)
     assert run.violation is None and run.ended == "completed" and traces == []
     assert all(r.passed for r in run.results), run.results
 
 
-def _os_layer_available(tmp_path: Path) -> dict:
-    run, _ = run_hostile(Hostile("none", "none", "", "", ()), tmp_path, guarded=False)
-    return run.os_layer or {}
+JAIL_SAMPLE = ("raw-os-open-write", "registry-os-system", "remove-victim", "socket-connect", "os-fork", "os-execv",
+               "write-without-audit-event", "guard-switched-off", "rebuilt-code-object", "post-check-rewrite",
+               "orphan-process", "ctypes-libc-system", "signal-parent")
 
 
-@pytest.mark.parametrize("hostile_id", ("raw-os-open-write", "registry-os-system", "remove-victim", "socket-connect"))
-def test_os_layer_alone_keeps_files_and_network_untouched(hostile_id, tmp_path):
-    probe = tmp_path / "probe"
-    probe.mkdir()
-    report = _os_layer_available(probe)
-    if not (report.get("network") and report.get("read_only")):
-        pytest.skip(f"this machine does not allow the OS layer: {report}")
-    work = tmp_path / "work"
-    work.mkdir()
-    run, traces = run_hostile(BY_ID[hostile_id], work, guarded=False)
-    assert run.violation is None  # the guard was off: only the OS layer stood in the way
+@pytest.mark.parametrize("hostile_id", JAIL_SAMPLE)
+def test_the_jail_alone_leaves_no_trace_on_the_host(hostile_id, tmp_path):
+    """The guard switched off (as a candidate that reached the interpreter could): the OS boundary holds."""
+    run, traces = run_hostile(BY_ID[hostile_id], tmp_path, guarded=False)
+    assert run.violation is None and run.jail is not None and run.jail["guard"] is False
     assert traces == [], traces
+
+
+@pytest.mark.parametrize("hostile_id", [h.id for h in CORPUS if h.stops != "guard"])
+def test_doors_the_guard_cannot_see_are_stopped_by_the_jail_or_the_wire(hostile_id, tmp_path):
+    hostile = BY_ID[hostile_id]
+    run, traces = run_hostile(hostile, tmp_path)
+    assert run.violation is None and traces == [], (run.violation, traces)
+    assert not all(r.passed for r in run.results), "a hostile candidate was accepted"
+    if hostile.stops == "wire":
+        assert "WireError" in run.results[0].detail, run.results[0]
+
+
+def test_jailed_code_cannot_read_a_key_planted_in_the_parent(tmp_path, monkeypatch):
+    """A format-string read of the environment finds the jail's clean environment, not the parent's."""
+    monkeypatch.setenv("OPENAI_API_KEY", "sk-planted-in-the-parent")
+    run, _ = run_hostile(BY_ID["format-string-environ"], tmp_path)
+    load = run.results[0]
+    assert load.outcome == "error" and "environ(" in load.detail  # the read happened, in the jail
+    assert "sk-planted" not in load.detail and "OPENAI_API_KEY" not in load.detail
+
+
+def test_a_shared_predicate_patched_in_the_jail_stays_intact_here(tmp_path):
+    from capmj.tasks import predicates
+
+    before = predicates.in_zone
+    run, _ = run_hostile(BY_ID["reduce-hook-patch"], tmp_path)
+    assert predicates.in_zone is before
+    bad = next(r for r in run.results if r.outcome != "pass")
+    assert bad.name == "not_solved_at_reset" and "already a success" in bad.detail  # its own lie, caught here
+
+
+def test_the_module_runs_under_its_installed_name_at_the_checks(tmp_path):
+    """A sleeper keyed on its module name sees the name it will have once installed."""
+    from hostile_candidates import MODULE
+
+    code = GOOD_TEXT().replace("        return Scene(", "        assert __name__ == " + repr(MODULE) + ", __name__\n"
+                               "        return Scene(")
+    from capmj.confine.jail import Limits
+    from capmj.confine.proxy import ModuleSource
+    from capmj.generate.isolate import run_isolated
+
+    run = run_isolated(ModuleSource(MODULE, code), name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
+                       limits=Limits(cpu_s=60, wall_s=120))
+    assert all(r.passed for r in run.results), run.results
+
+
+def GOOD_TEXT() -> str:  # noqa: N802 - reads like the constant it stands for
+    return (CANDIDATES / "good_zone_color.py").read_text()
 
 
 # --------------------------------------------------------------------------------------- the generator
@@ -169,5 +214,5 @@ def test_a_candidate_past_a_broken_static_check_is_refused_at_runtime_without_re
         calls = len(server.requests)
     rec = result.records[0]
     assert not rec.accepted and not rec.repaired and calls == 2  # pick examples, write: no repair, no vote
-    assert rec.reason.startswith("refused by the runtime guard: os.system") and rec.stage == "static"
+    assert rec.reason.startswith("refused by the runtime guard: import") and rec.stage == "static"
     assert not (tmp_path / "marker").exists() and not (tmp_path / "out" / "pyproject.toml").exists()

@@ -6,10 +6,11 @@ it speaks frames (:mod:`capmj.confine.wire`) on its stdin and stdout and nothing
 1. Trusted start-up: import the task API (numpy, the protocol, spawn, predicates), move the
    channel to private descriptors and point descriptors 0 and 1 at ``/dev/null`` (what the task
    prints goes to stderr, which the parent keeps a bounded tail of), install the seccomp filter
-   (no process, no program, no socket from here on) and the audit-hook guard (an early,
-   explained rejection of what the static check missed; the jail is the boundary, not the guard).
+   (no process, no program, no socket from here on).
 2. ``load``: the parent sends the module's exact text and its final module name (the name it has
-   once installed, so nothing distinguishes a check from a later run).  The text is compiled here
+   once installed, so nothing distinguishes a check from a later run).  The audit-hook guard is
+   installed first (an early, explained rejection of what the static check missed; the jail is
+   the boundary, not the guard — the parent may switch it off to measure the jail alone).  The text is compiled here
    from the string — never from a file, so no ``.pyc`` is ever read — and run; the answer is the
    task's facts: name, tags, docstring and which protocol methods it has.
 3. Calls: ``sample_scene`` (with the PCG64 state of the caller's generator, returning the scene and
@@ -28,7 +29,7 @@ import os
 import sys
 import traceback
 from types import ModuleType
-from typing import IO, Any
+from typing import IO, Any, Callable
 
 from capmj.confine import wire
 
@@ -59,14 +60,19 @@ def _facts(task: Any) -> dict[str, Any]:
 class Host:
     """The loaded task and the scenes it sampled; one method per request."""
 
-    def __init__(self) -> None:
+    def __init__(self, guard: Callable[[], Any]) -> None:
         self.task: Any = None
         self.scenes: dict[str, Any] = {}
+        self._guard = guard
 
     def load(self, msg: dict[str, Any]) -> dict[str, Any]:
         import inspect as _inspect
 
+        if self.task is not None:
+            raise RuntimeError("a module is already loaded in this process")
         name, text = str(msg["module"]), str(msg["text"])
+        if msg.get("guard", True):
+            self._guard()
         module = ModuleType(name)
         module.__file__ = CANDIDATE_FILE
         sys.modules[name] = module
@@ -146,21 +152,19 @@ def main() -> int:
     from capmj.confine import guard, seccomp
 
     inp, out = _private_channel()
-    host = Host()
     seccomp.install()
 
     def report(event: dict[str, Any]) -> None:
         v = event["violation"]
         wire.write_frame(out, {"violation": {"event": str(v["event"]), "detail": str(v["detail"])[:400]}})
 
-    g = guard.install(CANDIDATE_FILE, report)
+    host = Host(lambda: guard.install(CANDIDATE_FILE, report))
     while True:
         try:
             msg = wire.read_frame(inp, wire.MAX_TO_JAIL)
         except wire.WireError:
             return 0  # the parent closed the channel
         op = msg.get("op")
-        g.check = str(op)
         try:
             answer = getattr(host, str(op))(msg) if op in ("load", "sample_scene", "oracle_goals", "evaluate") \
                 else {"error": {"type": "WireError", "message": f"unknown op {op!r}", "traceback": ""}}

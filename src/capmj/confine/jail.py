@@ -11,8 +11,8 @@ BPF program, so the jailed process installs its own seccomp filter before it loa
 code (:mod:`capmj.confine.seccomp`), and rlimits are set on the jail before ``exec``.
 
 The root the jail sees holds only what the Python interpreter and capmj need to *read*: the
-interpreter's prefixes, the directories on ``sys.path``, ``/usr`` (with the merged-usr links) and
-the loader cache.  No home directory, no run folders, no sockets, no ``/proc`` of the host (the
+interpreter's prefixes, the site directories on ``sys.path``, capmj's package root, ``/usr``
+(with the merged-usr links) and the loader cache.  No home directory, no run folders, no sockets, no ``/proc`` of the host (the
 jail's own ``/proc`` shows only its PID namespace).
 
 :func:`jail_command` is pure (an argv); :func:`start` runs it under the limits.  :func:`problem`
@@ -66,11 +66,15 @@ class Limits:
                               f"open_files >= 16; got {self}")
 
 
+SITE_DIRS = ("site-packages", "dist-packages")
+
+
 def _readable_roots() -> list[str]:
-    """Host paths the jail binds read-only: the interpreter, every ``sys.path`` entry, ``/usr``."""
-    paths = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, "/usr",
-             str(Path(sys.executable).parent)}
-    paths.update(p for p in sys.path if p and os.path.isabs(p))
+    """Host paths the jail binds read-only: the interpreter's prefixes, the site directories on
+    ``sys.path``, capmj's own package root and ``/usr``.  Other ``sys.path`` entries (a script's
+    folder, ``PYTHONPATH``, the working directory) are left out: they may hold a project's files."""
+    paths = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, "/usr"}
+    paths.update(p for p in sys.path if os.path.isabs(p) and os.path.basename(os.path.normpath(p)) in SITE_DIRS)
     import capmj  # the package itself: an editable install maps it from outside sys.path
 
     paths.add(str(Path(capmj.__file__).resolve().parents[1]))

@@ -111,13 +111,13 @@ def _why_ended(returncode: int | None, limits: jail.Limits, timed_out: bool) -> 
 class _Jailed:
     """One jailed host process and its frame channel."""
 
-    def __init__(self, source: ModuleSource, limits: jail.Limits) -> None:
+    def __init__(self, source: ModuleSource, limits: jail.Limits, guard: bool) -> None:
         self.limits = limits
         self.stderr: IO[bytes] = tempfile.TemporaryFile(prefix="capmj-jail-")  # noqa: SIM115 - closed in close()
         self.proc = jail.start([sys.executable, *HOST], limits, self.stderr)
         self.calls = 0
         self.facts: TaskFacts | None = None
-        self._send({"op": "load", "module": source.module, "text": source.text})
+        self._send({"op": "load", "module": source.module, "text": source.text, "guard": guard})
 
     @property
     def pid(self) -> int:
@@ -227,7 +227,8 @@ class ConfinedTask:
     ``expected`` are the facts accepted at generation (from a manifest): the task's ``name``,
     ``tags`` and docstring come from them without starting a process, and a process that states
     different facts is refused.  Without them, the first access to a fact loads the module.
-    ``spare=False`` starts no spare process (one process at a time, each episode waits for its own).
+    ``spare=False`` starts no spare process (one process at a time, each episode waits for its own);
+    ``guard=False`` leaves the audit hook out of the jail (only to measure what the jail stops alone).
     """
 
     name: str
@@ -235,9 +236,10 @@ class ConfinedTask:
     tags: frozenset[str]
 
     def __init__(self, source: ModuleSource, limits: jail.Limits | None = None, *,
-                 expected: TaskFacts | None = None, sample_goal: str | None = None, spare: bool = True) -> None:
+                 expected: TaskFacts | None = None, sample_goal: str | None = None, spare: bool = True,
+                 guard: bool = True) -> None:
         self.source, self.limits, self.expected, self.use_spare = source, limits or jail.Limits(), expected, spare
-        self.sample_goal = sample_goal
+        self.sample_goal, self.guard = sample_goal, guard
         """A goal text recorded at acceptance (for listings that must not start a process)."""
         self._lock = threading.RLock()
         self._current: _Jailed | None = None
@@ -281,7 +283,7 @@ class ConfinedTask:
 
     # -- processes --------------------------------------------------------------------------
     def _spawn(self) -> _Jailed:
-        p = _Jailed(self.source, self.limits)
+        p = _Jailed(self.source, self.limits, self.guard)
         self._live.append(p)
         self.started += 1
         return p

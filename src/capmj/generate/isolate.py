@@ -53,13 +53,16 @@ def _load_result(e: BaseException) -> CheckResult:
 
 
 def run_isolated(source: ModuleSource, *, name: str, seeds: tuple[int, ...], accept_rate: float,
-                 tags: tuple[str, ...], limits: Limits) -> IsolatedRun:
+                 tags: tuple[str, ...], limits: Limits, guarded: bool = True) -> IsolatedRun:
     """Check the generated module ``source`` (its text runs only in the jail).
+
+    ``guarded=False`` leaves the audit hook out; only the tests and ``benchmarks/confinement.py``
+    do, to show what the jail stops on its own.
 
     Raises :class:`~capmj.errors.ConfinementError` when this machine cannot jail: then nothing runs.
     """
     jail.require()
-    task = ConfinedTask(source, limits)
+    task = ConfinedTask(source, limits, guard=guarded)
     t0 = time.perf_counter()
     running = [LOAD]
     violation: dict[str, str] | None = None
@@ -81,7 +84,7 @@ def run_isolated(source: ModuleSource, *, name: str, seeds: tuple[int, ...], acc
     done = {r.name for r in results}
     results += [CheckResult(c, "skip", "not run") for c in ORDER if c not in done]
     ended = "completed" if violation is None else f"refused by the runtime guard: {violation['detail']}"
-    info = {"jail": "bwrap", "seccomp": True, "guard": True, "processes": task.started}
+    info = {"jail": "bwrap", "seccomp": True, "guard": guarded, "processes": task.started}
     facts = task.expected.to_dict() if task.expected is not None else None
     return IsolatedRun(tuple(sorted(results, key=lambda r: ORDER.index(r.name))), ended,
                        time.perf_counter() - t0, violation, info, facts)
