@@ -14,7 +14,6 @@ from __future__ import annotations
 import ast
 import importlib
 import os
-from pathlib import Path
 from types import ModuleType
 
 import pytest
