@@ -35,17 +35,11 @@ class Job:
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """How workers build the agent: factory name and options (``None`` options are dropped).
-
-    ``api_key`` is the LLM provider's key the parent took from its environment
-    (:mod:`capmj.llm.keys`): workers get it here, in their agent's configuration, never through
-    their environment; it is not one of the ``options`` (which ``config.json`` records) and no
-    repr shows it."""
+    """How workers build the agent: factory name and options (``None`` options are dropped)."""
 
     name: str
     options: Mapping[str, Any] = field(default_factory=dict)
     images: bool = False
-    api_key: str | None = field(default=None, repr=False)
 
     @property
     def model(self) -> str | None:
@@ -97,10 +91,7 @@ class Worker:
             self._init_error = (describe(exc), error_facts(exc)[0])
 
     def _build_agent(self) -> Any:
-        options = dict(self.spec.options)
-        if self.spec.api_key is not None:
-            options["api_key"] = self.spec.api_key
-        return make_agent(self.spec.name, **options)
+        return make_agent(self.spec.name, **dict(self.spec.options))
 
     def _take_agent(self) -> Any:
         """An agent no other episode is using: agents keep per-episode state (client, transcript), so

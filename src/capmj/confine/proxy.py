@@ -46,6 +46,8 @@ from capmj.tasks.scene_method import DEPRECATED_SCENE_METHOD, SCENE_METHOD
 HOST = ("-I", "-B", "-m", "capmj.confine.host")
 """How the jailed interpreter is started (isolated mode: no environment, no user site, no cwd on
 the path; ``-B``: it writes no bytecode)."""
+_FACT_ATTRIBUTES = frozenset({"name", "tags", SCENE_METHOD, DEPRECATED_SCENE_METHOD, "oracle_goals", "evaluate"})
+"""Attributes that come from the task's facts (set by ``_present``)."""
 MAX_STDERR = 4_000
 """The tail of a jailed process's stderr that an error message quotes (characters)."""
 
@@ -270,6 +272,14 @@ class ConfinedTask:
             self.oracle_goals: Callable[[Scene], Sequence[OracleGoal]] = self._oracle_goals
         if m.get("evaluate"):
             self.evaluate: Callable[[Scene, SceneState], Verdict] = self._evaluate
+
+    def __getattr__(self, attr: str) -> Any:
+        """A protocol attribute of a task whose facts are not known yet: load the module first."""
+        if attr in _FACT_ATTRIBUTES and self.__dict__.get("expected") is None and "_lock" in self.__dict__:
+            self.load()
+            if attr in self.__dict__:
+                return self.__dict__[attr]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {attr!r}")
 
     def load(self) -> TaskFacts:
         """Start the first process, load the module and return its facts (checked against
