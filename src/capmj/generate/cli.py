@@ -48,9 +48,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--accept-rate", type=float, default=DEFAULT_ACCEPT_RATE, metavar="R",
                     help=f"minimum oracle success share over the seeds (default {DEFAULT_ACCEPT_RATE})")
     ap.add_argument("--workers", type=int, default=1, help="candidates generated in parallel (default 1)")
-    ap.add_argument("--cpu-limit", type=int, default=300, metavar="S", help="CPU seconds of a check worker (default 300)")
-    ap.add_argument("--memory-limit", type=int, default=4096, metavar="MB", help="address space of a check worker (default 4096)")
-    ap.add_argument("--wall-limit", type=float, default=600.0, metavar="S", help="wall seconds of a check worker (default 600)")
+    ap.add_argument("--cpu-limit", type=int, default=300, metavar="S", help="CPU seconds of one jailed process (one episode; default 300)")
+    ap.add_argument("--memory-limit", type=int, default=4096, metavar="MB", help="address space of one jailed process (default 4096)")
+    ap.add_argument("--wall-limit", type=float, default=600.0, metavar="S", help="wall seconds one call into the jail may take (default 600)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
     return ap
 

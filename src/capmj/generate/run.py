@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from capmj.confine import jail
 from capmj.generate.candidate import CandidateRecord, Context, run_candidate
 from capmj.generate.config import GenerateConfig
 from capmj.generate.library import load_library
@@ -54,7 +55,11 @@ def generate(cfg: GenerateConfig, *, on_done: Callable[[CandidateRecord], None] 
     Each candidate's line is appended to ``generation.jsonl`` as soon as it finishes, so a run
     killed after hours with a slow model keeps what it learnt; the end of the run rewrites the
     file in candidate order, deduplicated.
+
+    Raises :class:`~capmj.errors.ConfinementError` before anything else when this machine cannot
+    jail generated code (no candidate is written, none is checked unconfined).
     """
+    jail.require()
     cfg.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(cfg, _client(cfg), load_library(), cfg.out)
     records: list[CandidateRecord] = []
