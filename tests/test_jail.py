@@ -250,28 +250,9 @@ def test_limits_and_failures_of_the_jailed_code_are_named():
 def installed(tmp_path_factory):
     """A generated package written by the generator's own writer from a real check run, pip-installed
     (not editable: pip compiles bytecode into __pycache__) into a target directory."""
-    from capmj.generate.candidate import CandidateRecord
-    from capmj.generate.config import GenerateConfig
-    from capmj.generate.isolate import run_isolated
-    from capmj.generate.package import write_package
+    from generated_package import install_generated
 
-    root = tmp_path_factory.mktemp("generated")
-    cfg = GenerateConfig(mode="top-down", model="openai/none", out=root / "pkg", name=NAME, description="x",
-                         package="capmj-generated-jailtest")
-    source = ModuleSource(cfg.module_of(NAME), GOOD)
-    run = run_isolated(source, name=NAME, seeds=(0,), accept_rate=1.0, tags=("generated-by-llm",),
-                       limits=jail.Limits(wall_s=120))
-    assert all(r.passed for r in run.results), run.results
-    rec = CandidateRecord(0, "top-down", stage="accepted", accepted=True, name=NAME, goals=["Put every block in the "
-                          "zone of its color."], confinement={"sha256": source.sha256}, facts=run.facts, text=GOOD)
-    cfg.out.mkdir(parents=True)
-    write_package(cfg, [rec])
-    target = root / "site"
-    r = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-deps",
-                        "--no-build-isolation", "--no-index", "--target", str(target), str(cfg.out)],
-                       capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stdout + r.stderr
-    return target
+    return install_generated(tmp_path_factory.mktemp("generated"))
 
 
 def run_with(target: Path, code: str) -> dict:
