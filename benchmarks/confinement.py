@@ -1,14 +1,24 @@
-"""Which layer stops each door of the hostile-candidate corpus, the traces left, and what the guard costs.
+"""Which layer stops each hostile fixture, and what confining generated task code costs.
 
-For every module of ``tests/hostile_candidates.py`` (fixtures: the good candidate with one door
-to the operating system added) it runs the static check, then the real check worker three times
-with the static check bypassed: runtime guard alone, OS layer alone, both.  After each run it
-looks for the door's traces (the marker file, the victim file gone, a connection to a listening
-socket, a process still running from the run's folder).  Then the three good hand-written
-candidates go through all checks with both layers (acceptance must be unchanged) and
-``--repeat`` times with and without the guard, to time what the audit hook adds.
+Hostile task modules (``tests/hostile_candidates.py``: the good candidate with one door added):
 
-    python benchmarks/confinement.py [--repeat 5] [--out benchmarks/results/confinement.json]
+- ``static``: the static check's verdict, and whether its message names the door;
+- ``guarded``: checked with the static check bypassed, the code in the jail with the audit hook;
+- ``jail_only``: the same with the hook switched off (as code that reached the interpreter could).
+
+For each run: the layer that stopped it (``guard``: the hook refused an event; ``wire``: what it
+sent was not a valid message; ``jail``: it failed against the OS boundary; ``checks``: it ran, and
+the checks computed in capmj rejected it; ``harmless``: it ran and was accepted, with no trace
+left), the traces it left on the host (must be none), and whether it was accepted.  Hostile plans
+(``benchmarks/hostile_plans.py``, run as real ``--agent llm`` episodes) report their layer too.
+
+Costs: seconds per generated candidate (the good candidates through every check, jailed),
+milliseconds per confined ``evaluate`` call against the same call in-process, the start of a
+jailed process, and a benchmark grid (``python -m capmj.bench``, oracle, in-process worker) over
+the generated package against the same module installed as an ordinary plugin, run in turn
+A B A B … with the median of the pairwise ratios.
+
+    python benchmarks/confinement.py [--repeat 5] [--bench-seeds 10001:10011:2] [--out FILE]
 
 Prints one JSON object (and writes it to ``--out`` if given).
 """
@@ -19,80 +29,185 @@ import argparse
 import json
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from hostile_candidates import CORPUS, Hostile, run_hostile  # noqa: E402
+from generated_package import GOOD, install_generated, install_trusted_copy  # noqa: E402
+from hostile_candidates import CORPUS, MODULE, NAME, Hostile, run_hostile  # noqa: E402
 
-from capmj.generate.config import Limits  # noqa: E402
+from capmj.confine.jail import Limits  # noqa: E402
+from capmj.confine.proxy import ConfinedTask, ModuleSource  # noqa: E402
 from capmj.generate.isolate import run_isolated  # noqa: E402
 from capmj.generate.static import static_checks  # noqa: E402
 
-GOOD = {"good_zone_color.py": "put-blocks-in-zone-of-same-color", "good_block_in_bowl.py": "put-named-block-in-named-bowl",
-        "good_stack_in_zone.py": "stack-small-on-big-in-zone"}
-LAYERS = {"guard_only": {"os_layer": False}, "os_layer_only": {"guarded": False}, "both": {}}
+GOOD_FILES = {"good_zone_color.py": "put-blocks-in-zone-of-same-color",
+              "good_block_in_bowl.py": "put-named-block-in-named-bowl",
+              "good_stack_in_zone.py": "stack-small-on-big-in-zone"}
 
 
-def _attempt(h: Hostile, layers: dict[str, bool]) -> dict[str, object]:
-    with tempfile.TemporaryDirectory(prefix="capmj-hostile-") as tmp:
-        run, traces = run_hostile(h, Path(tmp), **layers)
-    failed = next((r for r in run.results if r.outcome in ("fail", "error")), None)
-    return {"event": (run.violation or {}).get("event"), "check": (run.violation or {}).get("check"),
-            "stopped": run.violation is not None or not traces and failed is not None,
-            "first_failure": failed.detail[:160] if failed else None, "traces": traces, "os_layer": run.os_layer}
-
-
-def _static(h: Hostile) -> dict[str, object]:
+def _static(h: Hostile) -> dict[str, Any]:
     code = h.module(Path("/nonexistent/marker"), Path("/nonexistent/victim"), 9)
     bad = next((r for r in static_checks(code) if r.outcome == "fail"), None)
     return {"rejected": bad is not None, "check": bad.name if bad else None,
             "names_the_door": bool(bad and h.static in bad.detail), "detail": bad.detail[:200] if bad else None}
 
 
-def _good(file: str, name: str, repeat: int) -> dict[str, object]:
-    path = ROOT / "tests" / "generator_candidates" / file
-    static_ok = all(r.passed for r in static_checks(path.read_text()))
-    kw = {"name": name, "seeds": (0, 1), "accept_rate": 1.0, "tags": ("generated-by-llm",), "limits": Limits()}
-    both = run_isolated(path, **kw)
-    walls: dict[str, list[float]] = {"guarded": [], "unguarded": []}
-    for _ in range(repeat):  # interleaved, so load drift hits both alike
-        walls["guarded"].append(run_isolated(path, os_layer=False, **kw).wall_s)
-        walls["unguarded"].append(run_isolated(path, os_layer=False, guarded=False, **kw).wall_s)
-    med = {k: statistics.median(v) for k, v in walls.items()}
-    return {"accepted_by_checks": static_ok and all(r.passed for r in both.results), "os_layer": both.os_layer,
-            "wall_s_median": {k: round(v, 3) for k, v in med.items()},
-            "guard_adds_s": round(med["guarded"] - med["unguarded"], 3),
-            "guard_adds_pct": round(100 * (med["guarded"] / med["unguarded"] - 1), 1)}
+def _layer(run: Any, traces: list[str]) -> str:
+    failed = next((r for r in run.results if r.outcome in ("fail", "error")), None)
+    if run.violation is not None:
+        return "guard"
+    if failed is not None and "WireError" in failed.detail:
+        return "wire"
+    if failed is not None and failed.name == "load":
+        return "jail"
+    if failed is not None:
+        return "checks"
+    return "harmless" if not traces else "NOT STOPPED"
+
+
+def _attempt(h: Hostile, guarded: bool) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory(prefix="capmj-hostile-") as tmp:
+        run, traces = run_hostile(h, Path(tmp), guarded=guarded)
+    failed = next((r for r in run.results if r.outcome in ("fail", "error")), None)
+    return {"stopped_by": _layer(run, traces), "event": (run.violation or {}).get("event"),
+            "first_failure": f"{failed.name}: {failed.detail[:140]}" if failed else None, "traces": traces,
+            "accepted": failed is None and run.violation is None}
+
+
+def _candidate_seconds(repeat: int) -> dict[str, Any]:
+    from generator_script import CANDIDATES
+
+    out = {}
+    for file, name in GOOD_FILES.items():
+        code = (CANDIDATES / file).read_text()
+        walls, passed = [], True
+        for _ in range(repeat):
+            run = run_isolated(ModuleSource(f"capmj_generated_bench.{name.replace('-', '_')}", code), name=name,
+                               seeds=(0, 1), accept_rate=1.0, tags=("generated-by-llm",), limits=Limits())
+            walls.append(run.wall_s)
+            passed &= all(r.passed for r in run.results)
+        out[file] = {"accepted_by_checks": passed, "seconds_median": round(statistics.median(walls), 3),
+                     "processes": run.jail["processes"] if run.jail else None}
+    return out
+
+
+def _evaluate_ms(calls: int) -> dict[str, Any]:
+    import importlib.util
+
+    from capmj.sim.state import SceneState
+    from capmj.tasks.protocol import make_scene
+    from generator_script import CANDIDATES
+
+    spec = importlib.util.spec_from_file_location("good_here", CANDIDATES / "good_zone_color.py")
+    assert spec is not None and spec.loader is not None
+    here = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(here)
+    task = ConfinedTask(ModuleSource(MODULE, GOOD), spare=False)
+    t0 = time.perf_counter()
+    task.load()
+    load_s = time.perf_counter() - t0
+    scene = make_scene(task, 10001)
+    state = SceneState.from_specs(scene.objects)
+    timings: dict[str, list[float]] = {"jailed": [], "in_process": []}
+    for _ in range(calls):
+        for key, t in (("jailed", task), ("in_process", here.TASK)):
+            t0 = time.perf_counter()
+            t.evaluate(scene, state)
+            timings[key].append(time.perf_counter() - t0)
+    starts = []
+    for seed in range(5):  # a fresh process per episode: what one costs when no spare is ready
+        task.new_episode()
+        t0 = time.perf_counter()
+        make_scene(task, seed)
+        starts.append(time.perf_counter() - t0)
+    task.close()
+    return {"calls": calls, "jailed_ms_median": round(1000 * statistics.median(timings["jailed"]), 3),
+            "in_process_ms_median": round(1000 * statistics.median(timings["in_process"]), 3),
+            "first_load_s": round(load_s, 3), "fresh_process_s_median": round(statistics.median(starts), 3)}
+
+
+def _bench_wall(seeds: str, repeat: int) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory(prefix="capmj-bench-confine-") as tmp:
+        root = Path(tmp)
+        sites = {"generated": install_generated(root), "built_in": install_trusted_copy(root)}
+        walls: dict[str, list[float]] = {k: [] for k in sites}
+        episodes: dict[str, list[Any]] = {}
+        for i in range(repeat + 1):  # the first pair warms caches and is not counted
+            for kind, site in sites.items():
+                env = {**os.environ, "PYTHONPATH": str(site)}
+                env.pop("CAPMJ_DISABLE_PLUGINS", None)
+                out = root / f"run-{kind}-{i}"
+                t0 = time.perf_counter()
+                r = subprocess.run([sys.executable, "-m", "capmj.bench", "--tasks", NAME, "--seeds", seeds, "--agent",
+                                    "oracle", "--workers", "0", "--no-log", "--no-progress", "--out", str(out)],
+                                   capture_output=True, text=True, env=env, timeout=1800)
+                wall = time.perf_counter() - t0
+                if r.returncode != 0:
+                    raise RuntimeError(r.stderr[-2000:])
+                rows = [json.loads(x) for x in (out / "episodes.jsonl").read_text().splitlines()]
+                episodes[kind] = [(e["seed"], e["success"], e.get("error_type")) for e in rows]
+                if i:
+                    walls[kind].append(wall)
+    ratios = [g / b for g, b in zip(walls["generated"], walls["built_in"])]
+    return {"seeds": seeds, "pairs": repeat, "wall_s_median": {k: round(statistics.median(v), 2) for k, v in walls.items()},
+            "ratio_median": round(statistics.median(ratios), 3), "ratio_min": round(min(ratios), 3),
+            "ratio_max": round(max(ratios), 3), "same_results": episodes["generated"] == episodes["built_in"],
+            "episodes": episodes["generated"]}
+
+
+def _plans() -> list[dict[str, Any]]:
+    try:
+        from hostile_plans import run_hostile_plans  # benchmarks/hostile_plans.py
+    except ImportError as e:  # pragma: no cover - reported, not fatal
+        return [{"error": f"hostile plans not run: {e}"}]
+    return [{k: row.get(k) for k in ("fixture", "stopped_by", "error", "peak_mb")} for row in run_hostile_plans()]
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5, help="timing runs per good candidate and mode")
+    ap.add_argument("--repeat", type=int, default=5, help="timing runs per measurement")
+    ap.add_argument("--bench-seeds", default="10001:10011:2", help="seeds of the paired bench grid")
+    ap.add_argument("--evaluate-calls", type=int, default=500)
     ap.add_argument("--out", type=Path, help="also write the JSON here")
     args = ap.parse_args()
     rows = []
     for h in CORPUS:
-        rows.append({"id": h.id, "door": h.door, "where": h.where, "static": _static(h),
-                     **{k: _attempt(h, v) for k, v in LAYERS.items()}})
-        print(f"{h.id}: static={rows[-1]['static']['check']} guard={rows[-1]['guard_only']['event']} "
-              f"os={rows[-1]['os_layer_only']['traces']}", file=sys.stderr, flush=True)
-    good = {f: _good(f, n, args.repeat) for f, n in GOOD.items()}
+        rows.append({"id": h.id, "door": h.door, "static": _static(h), "guarded": _attempt(h, True),
+                     "jail_only": _attempt(h, False)})
+        print(f"{h.id}: static={rows[-1]['static']['check']} guarded={rows[-1]['guarded']['stopped_by']} "
+              f"jail_only={rows[-1]['jail_only']['stopped_by']}", file=sys.stderr, flush=True)
+    plans = _plans()
+    costs = {"candidate": _candidate_seconds(args.repeat), "evaluate": _evaluate_ms(args.evaluate_calls),
+             "bench": _bench_wall(args.bench_seeds, args.repeat)}
+
+    def count(key: str, layer: str) -> int:
+        return sum(r[key]["stopped_by"] == layer for r in rows)
+
+    layers = ("guard", "wire", "jail", "checks", "harmless", "NOT STOPPED")
     total = {
         "modules": len(rows),
         "static_rejected": sum(r["static"]["rejected"] for r in rows),
         "static_names_the_door": sum(r["static"]["names_the_door"] for r in rows),
-        **{f"{k}_stopped": sum(bool(r[k]["stopped"]) for r in rows) for k in LAYERS},
-        **{f"{k}_traces": sum(bool(r[k]["traces"]) for r in rows) for k in LAYERS},
-        "not_stopped_by_guard": [r["id"] for r in rows if not r["guard_only"]["stopped"]],
-        "good_accepted": sum(bool(g["accepted_by_checks"]) for g in good.values()),
-        "guard_adds_s_median": statistics.median(float(g["guard_adds_s"]) for g in good.values()),  # type: ignore[arg-type]
+        "guarded_by_layer": {k: count("guarded", k) for k in layers},
+        "jail_only_by_layer": {k: count("jail_only", k) for k in layers},
+        "traces_on_host": sum(bool(r[k]["traces"]) for r in rows for k in ("guarded", "jail_only")),
+        "hostile_accepted_guarded": [r["id"] for r in rows if r["guarded"]["accepted"]],
+        "plans": len(plans), "plans_by_layer": {k: sum(p.get("stopped_by") == k for p in plans)
+                                               for k in sorted({str(p.get("stopped_by")) for p in plans})},
+        "seconds_per_candidate_median": statistics.median(c["seconds_median"] for c in costs["candidate"].values()),
+        "evaluate_ms_median": costs["evaluate"]["jailed_ms_median"],
+        "bench_ratio_median": costs["bench"]["ratio_median"],
         "load_avg": os.getloadavg()[0],
     }
-    out = {"total": total, "good": good, "corpus": rows}
+    out = {"total": total, "costs": costs, "corpus": rows, "plans": plans}
     text = json.dumps(out, indent=1)
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
