@@ -62,13 +62,17 @@ def is_pose(v: Any) -> bool:
 
 
 def summary(value: Any, limit: int = 160) -> str:
-    """A value as the call log and error messages show it: rounded, at most ``limit`` characters."""
-    if isinstance(value, np.ndarray):
+    """A value as the call log and error messages show it: rounded, at most ``limit`` characters
+    (and never more made: a plan value's full text can be huge, see :func:`~capmj.agents.sandbox.sizes.preview`)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
         text = np.array2string(np.round(value, 4), separator=", ", threshold=20)
     elif isinstance(value, float):
         text = f"{value:.4f}"
-    elif isinstance(value, (list, tuple)) and value and all(isinstance(v, float) for v in value):
-        text = "[" + ", ".join(f"{v:.4f}" for v in value) + "]"
+    elif isinstance(value, (list, tuple)) and value and all(isinstance(v, float) for v in value[:limit]):
+        shown = value[: limit // 3 + 1]  # a float takes at least 3 characters: enough to fill the limit
+        text = "[" + ", ".join(f"{v:.4f}" for v in shown) + ("]" if len(shown) == len(value) else ", ...")
     else:
-        text = repr(value)
+        from capmj.agents.sandbox.sizes import preview  # the sandbox package imports this module
+
+        text = preview(value, limit)
     return text if len(text) <= limit else text[: limit - 3] + "..."
