@@ -62,6 +62,8 @@ class PlannerAPI:
         """One entry per API call: ``{"i", "fn", "args", "result" | "error", "sim_time"}``."""
         self.messages: list[str] = []
         """What the plan said through ``say``."""
+        self.said_chars = 0
+        """Characters of :attr:`messages` together (capped by the context's ``Budget.max_said_chars``)."""
         self._footprints = Footprints.from_world(self._world)
         """Table geometry (footprints, surfaces, occupancy, free positions), read live."""
         self.resolved: list[tuple[str, str]] = []

@@ -30,10 +30,12 @@ of a freshly spawned scene, and ``World.settle`` stops as soon as everything is 
 
 @dataclass(frozen=True)
 class Budget:
-    """Per-attempt limits: pick-and-place calls and simulation steps."""
+    """Per-attempt limits: pick-and-place calls, simulation steps, and characters of the messages
+    a plan records with ``say`` (they are kept in the episode's record)."""
 
     max_primitives: int = 40
     max_sim_steps: int = 150_000  # 300 s of simulated time
+    max_said_chars: int = 100_000
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.confidence import assess
 from capmj.agents.llm_meter import LLMMeter, check_limits
 from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
-from capmj.agents.lmp import LMPCall, LMPSession, find_llm_error
+from capmj.agents.lmp import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.perceived import make_api
 from capmj.agents.plan_check import plan_check
@@ -105,6 +105,7 @@ class LLMAgent:
         o = self.options
         meter = self.meter = LLMMeter(self.model, price=o.price, max_tokens=o.episode_max_tokens,
                                       max_cost_usd=o.episode_max_cost_usd)
+        self.helper_cap = HelperCallCap(o.episode_max_helper_calls)  # all attempts of the episode together
         ctx.notes["llm_calls"] = meter.calls
         transcript: list[LMPCall] = []
         self.transcript = transcript
@@ -147,9 +148,10 @@ class LLMAgent:
                 record, decision, rule = self._decide(ctx, record, error, report, outcome, movable, from_initial)
                 attempts.append(record)
                 self._record_attempt(ctx, record)
-                if meter.exceeded is not None:
+                exceeded = meter.exceeded or self.helper_cap.exceeded
+                if exceeded is not None:
                     stopped = "llm budget"
-                    last_error = error or meter.exceeded
+                    last_error = error or exceeded
                     break
                 if isinstance(error, LLMError):
                     stopped = "llm error"
@@ -191,8 +193,9 @@ class LLMAgent:
             on_unknown=o.on_unknown, reset=from_initial)
         rule = decision.rule
         unknown = rule in ("unknown_replan", "unknown_stop")  # recorded as before, whatever stops the loop
-        if self.meter.exceeded is not None or isinstance(error, LLMError):
-            rule = "llm_budget" if self.meter.exceeded is not None else "llm_error"
+        over = self.meter.exceeded is not None or self.helper_cap.exceeded is not None
+        if over or isinstance(error, LLMError):
+            rule = "llm_budget" if over else "llm_error"
         record = replace(record, on_unknown=o.on_unknown if unknown else None, rule=rule,
                          confidence=checked.confidence if checked is not None else None,
                          low_confidence=checked.why if checked is not None else None)
@@ -214,7 +217,7 @@ class LLMAgent:
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
         session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
                              attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
-                             lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth,
+                             lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=self.helper_cap,
                              rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
         session.check = plan_check(session, ctx)  # a plan's own parse_completion (CapRavens' plans check and retry)
         before = len(client.records)

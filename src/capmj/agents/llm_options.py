@@ -21,6 +21,7 @@ from typing import Any, Callable, Mapping
 
 from capmj.agents.choices import ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
 from capmj.agents.llm_meter import Price, check_limit, parse_price
+from capmj.agents.lmp import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.agents.loop_policy import check_policy
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET
 from capmj.agents.sandbox import SandboxBudget
@@ -86,6 +87,9 @@ class LLMAgentOptions:
     """The prompt folder (None: the packaged prompts or ``$CAPMJ_PROMPTS_DIR``)."""
     episode_max_tokens: int | None = None
     episode_max_cost_usd: float | None = None
+    episode_max_helper_calls: int | None = DEFAULT_EPISODE_MAX_HELPER_CALLS
+    """Helper LMP calls the episode's code may make (:class:`~capmj.agents.lmp.HelperCallCap`;
+    None: no cap).  Over it the episode ends as over its LLM budget (failure ``budget``)."""
     price: Price | None = None
     """The declared price (USD per million input, output tokens); a string ``"IN,OUT"`` is parsed."""
 
@@ -117,6 +121,7 @@ class LLMAgentOptions:
         set_("price", parse_price(self.price))
         set_("episode_max_tokens", check_limit(self.episode_max_tokens, "episode_max_tokens", int))
         set_("episode_max_cost_usd", check_limit(self.episode_max_cost_usd, "episode_max_cost_usd", float))
+        set_("episode_max_helper_calls", check_limit(self.episode_max_helper_calls, "episode_max_helper_calls", int))
 
 
 OPTION_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(LLMAgentOptions))

@@ -31,12 +31,15 @@ from capmj.agents.prompt_files import (META, QUESTION, Example, PromptFile, load
                                        load_system_prompt, object_names, prompts_dir)
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.agents.sandbox.located import WRITTEN_END, WRITTEN_START, located_error
-from capmj.errors import LLMError, PlanError, describe
+from capmj.agents.sandbox.sizes import preview, text_length
+from capmj.errors import HelperCallsExceeded, LLMError, PlanError, TextBudgetExceeded, describe
 from capmj.record import NullRecorder, Recorder
 
 __all__ = [
     "ACTION_FUNCTIONS",
+    "DEFAULT_EPISODE_MAX_HELPER_CALLS",
     "Example",
+    "HelperCallCap",
     "LMPSession",
     "META",
     "PromptFile",
@@ -55,6 +58,40 @@ __all__ = [
 ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order", "reset"})
 """API functions that change the scene (the robot moves, or ``reset`` restores the initial scene):
 only the planner's code may call them, never a helper LMP."""
+
+
+DEFAULT_EPISODE_MAX_HELPER_CALLS = 200
+"""Helper LMP calls one episode's code may make, all attempts together (``episode_max_helper_calls``).
+
+Why a default cap: a plan loop calling a helper whose code loops calling helpers multiplies, and
+without a cap one episode asked the LLM 250 000 times.  CapRavens-style plans call a helper a few
+times per attempt (helpers calling one more at most), so this is far above any plan that works."""
+
+
+@dataclass
+class HelperCallCap:
+    """Counts the helper LMP calls of one episode and refuses every call past ``limit`` (None: no
+    cap) with :class:`~capmj.errors.HelperCallsExceeded`, before the LLM is asked.
+
+    Counted: ``parse_obj_name``, ``parse_position``, ``parse_question`` (from the plan or from a
+    helper's code), ``parse_function`` and a plan's ``parse_completion``; the planner's own
+    requests and the reporter's verdict after a plan are not.  Once refused, ``exceeded`` holds the
+    error and every later call is refused too; the agent ends the episode as over its LLM budget."""
+
+    limit: int | None = DEFAULT_EPISODE_MAX_HELPER_CALLS
+    used: int = 0
+    exceeded: HelperCallsExceeded | None = None
+
+    def take(self, lmp: str) -> None:
+        """Count one call of ``lmp``; raises HelperCallsExceeded past the limit."""
+        if self.exceeded is not None:
+            raise HelperCallsExceeded(str(self.exceeded))
+        self.used += 1
+        if self.limit is not None and self.used > self.limit:
+            self.exceeded = HelperCallsExceeded(
+                f"helper LMP call budget of {self.limit} calls per episode exceeded by a call of {lmp} "
+                "(episode_max_helper_calls)")
+            raise HelperCallsExceeded(str(self.exceeded))
 
 
 def find_llm_error(exc: BaseException | None) -> LLMError | None:
@@ -135,6 +172,8 @@ class LMPSession:
     the objects it measures); deeper code gets an error naming the limit, so two helpers asking
     each other cannot loop."""
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+    helper_cap: HelperCallCap = field(default_factory=HelperCallCap)
+    """The episode's count of helper LMP calls (the agent shares one across its attempts)."""
     check: Callable[..., Any] | None = None
     """The plan's ``parse_completion(goal, context=None)``: the text reporter over the current scene
     (:func:`capmj.agents.plan_check.plan_check`), bound by the agent that has one; None, plan code
@@ -304,7 +343,12 @@ class LMPSession:
             raise
 
     def run_lmp(self, lmp: str, question: str, return_var: str, *, query: str | None = None) -> Any:
-        """Generic helper LMP: the value of ``return_var`` after running the LMP's code."""
+        """Generic helper LMP: the value of ``return_var`` after running the LMP's code.
+
+        Counted by :attr:`helper_cap`.  A value whose text would pass the helper budget's
+        ``max_text_chars`` is refused (:class:`~capmj.errors.TextBudgetExceeded`, raised to the
+        caller, recorded as the call's result): the caller's record and log would hold that text."""
+        self.helper_cap.take(lmp)
         call = self.next_call(lmp, query if query is not None else question)
         self._helper_depth += 1
         try:
@@ -316,6 +360,12 @@ class LMPSession:
             self.record(call, "error", describe(exc))
             raise exc
         value = ns[return_var]
+        cap = self.lmp_budget.max_text_chars
+        if text_length(value, cap, as_repr=True) is None:
+            refused = TextBudgetExceeded(f"the value {lmp} returned would be more than {cap} characters of text "
+                                         "(max_text_chars of the helper budget)")
+            self.record(call, "result", f"refused: {preview(value, 200)}")
+            raise refused
         self.record(call, "result", _short_repr(value))
         return value
 
@@ -342,6 +392,7 @@ class LMPSession:
         """Source of ``def name(...)`` written for the call statement ``site``."""
         site = " ".join(site.split())
         question = f"# define function: {site if site.endswith('.') else site + '.'}"
+        self.helper_cap.take("parse_function")
         call = self.next_call("parse_function", name)
         text = self.ask(call, self.messages(self.prompt("parse_function").render(question)))
         try:
@@ -360,8 +411,5 @@ def _sentence(text: object) -> str:
 
 
 def _short_repr(value: Any, limit: int = 2000) -> str:
-    try:
-        text = repr(value)
-    except Exception as exc:  # noqa: BLE001 - a broken __repr__ in LLM data must not crash logs
-        text = f"<unrepresentable {type(value).__name__}: {exc}>"
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    """``repr(value)`` cut to ``limit`` characters, made without ever making more (never raises)."""
+    return preview(value, limit)

@@ -40,6 +40,7 @@ def plan_check(session: LMPSession, ctx: Any) -> Callable[..., bool]:
     def parse_completion(goal: Any, context: Any = None) -> bool:
         """Whether ``goal`` is achieved in the scene as it is now (the text reporter's verdict)."""
         nonlocal count
+        session.helper_cap.take("parse_completion")
         count += 1
         ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
         report = reporter.judge(session, ctx, str(goal))

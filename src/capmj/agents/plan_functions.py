@@ -17,6 +17,8 @@ from capmj.agents.api_values import Coordinate, denormalize_uv
 from capmj.agents.api_values import summary as _summary
 from capmj.agents.capravens_api import CapRavensFunctions
 from capmj.agents.footprints import FREE_CLEARANCE
+from capmj.agents.sandbox.sizes import capped_text
+from capmj.errors import TextBudgetExceeded
 from capmj.sim.footprint import ROUND_KINDS
 from capmj.sim.pose import quat_euler_xyz, wxyz
 
@@ -198,8 +200,15 @@ class PlanFunctions(CapRavensFunctions):
             put(upper, lower)
 
     def say(self, msg) -> None:
-        """Record a message in the episode log."""
-        text = str(msg)
+        """Record a message in the episode log.  The messages of one attempt hold at most
+        ``Budget.max_said_chars`` characters together; one that would pass it is refused
+        (:class:`~capmj.errors.TextBudgetExceeded`) before its text is made."""
+        cap = self._api._ctx.budget.max_said_chars
+        text = capped_text(msg, cap - self._api.said_chars)
+        if text is None:
+            raise TextBudgetExceeded(f"say() would record more than {cap} characters in this attempt "
+                                     "(Budget.max_said_chars)")
+        self._api.said_chars += len(text)
         self._api.messages.append(text)
         self._api._ctx.recorder.text("planner/say", text, self._api._world.time)
 

@@ -21,6 +21,7 @@ from capmj.bench.report import report
 from capmj.bench.run import CONFIRM_LLM_EPISODES, EXIT_BUDGET, one_line, prepare_out, run_grid
 from capmj.bench.seeds import TEST_SEEDS, parse_seeds
 from capmj.errors import CapmjError, ConfigError
+from capmj.llm.keys import take_secrets
 from capmj.tasks import registry
 
 EPILOG = """\
@@ -143,6 +144,11 @@ def report_main(argv: Sequence[str]) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The bench's commands.  Every one starts by taking the secrets out of this process's
+    environment (:func:`capmj.llm.keys.take_secrets`): the grid, ``judge`` and ``replay-check`` run
+    LLM-written code here and in workers, which inherit the environment; the LLM client gets its
+    key explicitly."""
+    take_secrets()
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "report":
         return report_main(argv[1:])

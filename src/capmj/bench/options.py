@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
+from capmj.agents.lmp import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
 
@@ -85,6 +86,10 @@ AGENT_FLAGS: tuple[Flag, ...] = (
          "failure 'budget'", int, "N"),
     Flag(("--episode-max-cost-usd",), "episode_max_cost_usd", "LLM cost per episode (needs a known or declared "
          "price)", float, "USD"),
+    Flag(("--episode-max-helper-calls",), "episode_max_helper_calls", "helper LMP calls per episode (parse_obj_name, "
+         f"parse_position, ... called by the code; default: {DEFAULT_EPISODE_MAX_HELPER_CALLS}); an episode over it "
+         "ends with failure 'budget'",
+         int, "N"),
     Flag(("--price",), "price", "declare the model's price in USD per million input,output tokens (local/unlisted "
          "models)", metavar="IN,OUT"),
 )

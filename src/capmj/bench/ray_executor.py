@@ -27,10 +27,12 @@ from typing import Any, Callable, Iterable, Sequence
 from capmj.bench.executor import Execution, GridStats, OnResult, RecordSink, crash_error
 from capmj.bench.worker import AgentSpec, Job, Worker, ignore_sigint
 from capmj.errors import ConfigError, WorkerCrash, WorkerError, describe
+from capmj.llm.keys import secret_free
 
-FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "OPENAI_API_KEY",
-                 "ANTHROPIC_API_KEY", "LITELLM_LOCAL_MODEL_COST_MAP")
-"""Environment variables of the bench process that Ray actors (possibly on other machines) get too."""
+FORWARDED_ENV = ("CAPMJ_LLM_CACHE", "CAPMJ_PROMPTS_DIR", "MUJOCO_GL", "PYTHONHASHSEED", "LITELLM_LOCAL_MODEL_COST_MAP")
+"""Environment variables of the bench process that Ray actors (possibly on other machines) get too.
+No secret among them (:func:`capmj.llm.keys.is_secret_name`): actors run LLM-written code, and get
+the provider's key in their ``AgentSpec``."""
 
 
 def import_ray() -> Any:
@@ -75,7 +77,7 @@ class RayExecutor(RecordSink):
         ray = import_ray()
         started_here = not ray.is_initialized()
         if started_here:
-            env = {k: os.environ[k] for k in FORWARDED_ENV if k in os.environ}
+            env = secret_free({k: os.environ[k] for k in FORWARDED_ENV if k in os.environ})
             kwargs: dict[str, Any] = {"runtime_env": {"env_vars": env}, "log_to_driver": False,
                                       "include_dashboard": False}
             if self.address:

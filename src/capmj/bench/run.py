@@ -15,7 +15,7 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 
@@ -86,6 +86,9 @@ class _Grid:
     agent_label: str
     model: str | None
     manifest: dict[str, Any]
+    api_key: str | None = field(default=None, repr=False)
+    """The key the agent's LLM provider needs, taken from the environment (None: none needed or
+    the options name one); handed to the workers in their ``AgentSpec``."""
 
     def facts(self) -> dict[str, Any]:
         """What ``config.json`` records of the grid."""
@@ -136,7 +139,16 @@ def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | 
     config.run_budget.check_price(agent)
     manifest = run_manifest(agent, tasks, stored)
     prepare_out(inv.run_dir.root)
-    return _Grid(seeds, tasks, registered, agent_label, model, manifest)
+    return _Grid(seeds, tasks, registered, agent_label, model, manifest, _environment_key(agent))
+
+
+def _environment_key(agent: Any) -> str | None:
+    """The key an LLM agent's provider reads from the environment (taken out of it when the bench
+    started), when its options name no key and no local server: the workers' environment has none."""
+    llm = getattr(agent, "config", None)
+    if llm is None or getattr(llm, "api_key", None) is not None or getattr(llm, "api_base", None):
+        return None
+    return getattr(llm, "resolved_api_key", None)
 
 
 def _resolve_tasks(selector: str) -> tuple[list[str], list[Any]]:
@@ -228,7 +240,8 @@ def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: list[Job], budget
     t0 = time.perf_counter()
     with ResultsWriter(run.episodes) as writer, _stop_on_signals():
         try:
-            stats = run_jobs_to_file(jobs, config.agent_spec, config.execution, run_dir=run, writer=writer,
+            spec = replace(config.agent_spec, api_key=g.api_key)
+            stats = run_jobs_to_file(jobs, spec, config.execution, run_dir=run, writer=writer,
                                      progress=progress, registered=g.registered, stop=budget.stop)
         except KeyboardInterrupt as exc:
             interrupted = getattr(exc, "signum", signal.SIGINT)

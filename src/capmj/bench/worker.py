@@ -35,11 +35,17 @@ class Job:
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """How workers build the agent: factory name and options (``None`` options are dropped)."""
+    """How workers build the agent: factory name and options (``None`` options are dropped).
+
+    ``api_key`` is the LLM provider's key the parent took from its environment
+    (:mod:`capmj.llm.keys`): workers get it here, in their agent's configuration, never through
+    their environment; it is not one of the ``options`` (which ``config.json`` records) and no
+    repr shows it."""
 
     name: str
     options: Mapping[str, Any] = field(default_factory=dict)
     images: bool = False
+    api_key: str | None = field(default=None, repr=False)
 
     @property
     def model(self) -> str | None:
@@ -91,7 +97,10 @@ class Worker:
             self._init_error = (describe(exc), error_facts(exc)[0])
 
     def _build_agent(self) -> Any:
-        return make_agent(self.spec.name, **dict(self.spec.options))
+        options = dict(self.spec.options)
+        if self.spec.api_key is not None:
+            options["api_key"] = self.spec.api_key
+        return make_agent(self.spec.name, **options)
 
     def _take_agent(self) -> Any:
         """An agent no other episode is using: agents keep per-episode state (client, transcript), so

@@ -298,6 +298,9 @@ def _judge_all(judge: Any, cases: list[Any], args: argparse.Namespace, out: Path
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from capmj.llm.keys import take_secrets
+
+    take_secrets()  # reporters' checking code runs in this process: no key in its environment
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "report":
         from capmj.judge.compare import main as compare_main

@@ -8,10 +8,11 @@ it in ``config.json``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from capmj.errors import ConfigError
+from capmj.llm.keys import api_key_for
 
 DEFAULT_TIMEOUT_S = 300.0
 """Per-request timeout.  Generous on purpose: a 1.5B model on 2 CPU cores needs 40-90 s for a cold
@@ -27,7 +28,9 @@ class LLMConfig:
 
     model: str
     api_base: str | None = None
-    api_key: str | None = None
+    api_key: str | None = field(default=None, repr=False)
+    """The provider's key (None: the variable its provider reads, see :mod:`capmj.llm.keys`);
+    never shown in a repr."""
     temperature: float = 0.0
     max_tokens: int = 2048
     timeout_s: float = DEFAULT_TIMEOUT_S
@@ -55,7 +58,9 @@ class LLMConfig:
 
     @property
     def resolved_api_key(self) -> str | None:
-        """The key to send: explicit, else a dummy for a local ``api_base``, else litellm's env."""
+        """The key to send, always explicitly: ``api_key``, else a dummy for a local ``api_base``,
+        else the variable the provider reads, from the secrets taken from this process's
+        environment or still in it (:func:`capmj.llm.keys.api_key_for`; None when there is none)."""
         if self.api_key is not None:
             return self.api_key
-        return LOCAL_DUMMY_KEY if self.api_base else None
+        return LOCAL_DUMMY_KEY if self.api_base else api_key_for(self.model, self.api_base)

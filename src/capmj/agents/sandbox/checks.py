@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import ast
 import copy
+import re
+import string
+from collections.abc import Iterator
 
 from capmj.confine.names import FORBIDDEN_ATTRIBUTES
 from capmj.errors import PlanError, PlanSyntaxError, SandboxViolation
@@ -50,10 +53,38 @@ _WHY_NOT = {
     ast.YieldFrom: "generators (yield) are not allowed",
 }
 
-# Methods whose result can be far larger than their inputs; loads of these attributes are routed
-# through a checker.
+# Methods whose result can be far larger than their inputs, and a string's format methods; loads
+# of these attributes are routed through a checker.
 _GROWING_METHODS = frozenset({"repeat", "resize", "ljust", "rjust", "center", "zfill",
-                              "expandtabs", "replace", "join"})
+                              "expandtabs", "replace", "join", "dot", "clip", "format", "format_map"})
+
+_FIELD_NAME = re.compile(r"\d*|[^\W\d]\w*")
+"""A ``str.format`` field that names an argument only (``{}``, ``{0}``, ``{name}``), no attribute
+(``{0.x}``) and no item (``{0[y]}``)."""
+
+
+def format_fields(template: str) -> Iterator[str]:
+    """Every replacement field name of a ``str.format`` template, those nested in format specs
+    (``{0:{1}}``) included.  Raises ValueError for a malformed template, as ``str.format`` does."""
+    for _, name, spec, _ in string.Formatter().parse(template):
+        if name is not None:
+            yield name
+        if spec and "{" in spec:
+            yield from format_fields(spec)
+
+
+def reaching_field(template: str) -> str | None:
+    """The first field of ``template`` that reaches an attribute or an item (None: none does, or
+    the template is malformed and ``str.format`` will say so itself)."""
+    try:
+        return next((f for f in format_fields(template) if not _FIELD_NAME.fullmatch(f)), None)
+    except ValueError:
+        return None
+
+
+FORMAT_FIELD_RULE = ("format fields may name arguments only ({}, {0}, {name}); use the value in the "
+                     "arguments instead of reaching into it")
+"""Why a field such as ``{0.x}`` or ``{0[y]}`` is refused, as plan code is told."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -100,6 +131,12 @@ def _check_node(node: ast.AST, line: int | None, bound: set[str], code: str) -> 
             reject(f"private attribute '.{node.attr}' is not allowed")
         if node.attr in FORBIDDEN_ATTRIBUTES:
             reject(f"attribute '.{node.attr}' is not allowed")
+        if node.attr in ("format", "format_map") and isinstance(node.value, ast.Constant) \
+                and isinstance(node.value.value, str):
+            field = reaching_field(node.value.value)
+            if field is not None:
+                reject(f"format field {{{field}}} reaches an attribute or an item of an argument; "
+                       f"{FORMAT_FIELD_RULE}")
     elif isinstance(node, ast.keyword) and node.arg is not None:
         identifiers.append(node.arg)
     elif isinstance(node, ast.arg):
@@ -135,8 +172,26 @@ def check_code(code: str) -> ast.Module:
 # ------------------------------------------------------------------------------------------------
 # 2. rewrite
 # ------------------------------------------------------------------------------------------------
-_BINOP_GUARDS = {ast.Mult: "__cap_mul", ast.Pow: "__cap_pow", ast.LShift: "__cap_lshift",
-                 ast.Add: "__cap_add"}
+_BINOP_GUARDS: dict[type[ast.operator], str] = {
+    ast.Add: "__cap_add", ast.Sub: "__cap_sub", ast.Mult: "__cap_mul", ast.Div: "__cap_truediv",
+    ast.FloorDiv: "__cap_floordiv", ast.Mod: "__cap_mod", ast.Pow: "__cap_pow", ast.LShift: "__cap_lshift",
+    ast.RShift: "__cap_rshift", ast.BitAnd: "__cap_and", ast.BitOr: "__cap_or", ast.BitXor: "__cap_xor",
+    ast.MatMult: "__cap_matmul",
+}
+"""Every binary operator, by the guard that checks its result's size first (arrays broadcast)."""
+
+_COMPARE_GUARDS: dict[type[ast.cmpop], str] = {
+    ast.Lt: "lt", ast.LtE: "le", ast.Gt: "gt", ast.GtE: "ge", ast.Eq: "eq", ast.NotEq: "ne", ast.In: "in",
+    ast.NotIn: "not_in", ast.Is: "is", ast.IsNot: "is_not",
+}
+"""Comparisons by guard name (``__cap_cmp_<name>``; identity tests are never rewritten alone)."""
+
+THUNK_ARG = "__cap_thunk"
+"""The one parameter of the lambdas that wrap the operands of a chained comparison; the tracer
+does not count their frames as executed lines (they are not lines of the submitted code)."""
+
+_TEXT_BUILTINS = frozenset({"str", "repr"})
+"""Builtins whose calls ``str(x)`` / ``repr(x)`` are routed through ``__cap_text_call``."""
 
 
 def _helper_call(name: str, args: list[ast.expr], like: ast.AST) -> ast.Call:
@@ -155,6 +210,40 @@ class _Rewriter(ast.NodeTransformer):
         self.generic_visit(node)
         guard = _BINOP_GUARDS.get(type(node.op))
         return _helper_call(guard, [node.left, node.right], node) if guard else node
+
+    def visit_Compare(self, node: ast.Compare) -> ast.AST:
+        """``a < b`` -> ``__cap_cmp_lt(a, b)``; a chain ``a < b < c`` -> ``__cap_chain(("lt", "lt"),
+        lambda: a, lambda: b, lambda: c)`` (each operand once, in order, short-circuiting).  A
+        chain whose operands bind names (``:=``) stays as written: a lambda would scope them."""
+        self.generic_visit(node)
+        names = [_COMPARE_GUARDS[type(op)] for op in node.ops]
+        if len(names) == 1:
+            if names[0] in ("is", "is_not"):
+                return node
+            return _helper_call(f"__cap_cmp_{names[0]}", [node.left, *node.comparators], node)
+        operands = [node.left, *node.comparators]
+        if any(isinstance(n, ast.NamedExpr) for o in operands for n in ast.walk(o)):
+            return node
+        thunks: list[ast.expr] = []
+        for operand in operands:
+            params = ast.arguments(posonlyargs=[], args=[ast.arg(THUNK_ARG)], vararg=None, kwonlyargs=[],
+                                   kw_defaults=[], kwarg=None, defaults=[ast.Constant(None)])
+            thunks.append(ast.copy_location(ast.Lambda(params, operand), operand))
+        ops = ast.copy_location(ast.Tuple([ast.Constant(n) for n in names], ast.Load()), node)
+        return _helper_call("__cap_chain", [ops, *thunks], node)
+
+    def visit_FormattedValue(self, node: ast.FormattedValue) -> ast.AST:
+        self.generic_visit(node)  # f"{x}": the size of x's text is checked before it is made
+        node.value = _helper_call("__cap_field", [node.value, ast.Constant(node.conversion)], node.value)
+        return node
+
+    def visit_Call(self, node: ast.Call) -> ast.AST:
+        self.generic_visit(node)
+        if isinstance(node.func, ast.Name) and node.func.id in _TEXT_BUILTINS:
+            call = ast.Call(func=ast.Name(id="__cap_text_call", ctx=ast.Load()), args=[node.func, *node.args],
+                            keywords=node.keywords)
+            return ast.copy_location(call, node)
+        return node
 
     def visit_AugAssign(self, node: ast.AugAssign) -> ast.AST:
         # Re-reading the target is only safe when that has no side effects (no calls in it).

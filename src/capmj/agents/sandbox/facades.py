@@ -28,11 +28,11 @@ import numpy as _np
 
 from capmj.agents.sandbox.ordered import OrderedFrozenSet, OrderedSet
 from capmj.agents.sandbox.ravens_utils import utils_members
+from capmj.agents.sandbox.sizes import array_elements, broadcast_elements, capped_text, dot_elements
+from capmj.errors import TextBudgetExceeded
 
 if TYPE_CHECKING:
     from capmj.agents.sandbox.session import _Session
-
-_MAX_PRINT_CHARS = 1_000_000
 
 _SAFE_BUILTINS = (
     "abs", "all", "any", "bool", "chr", "dict", "divmod", "enumerate", "filter", "float",
@@ -134,12 +134,18 @@ def _arange_len(*args: Any, **kwargs: Any) -> int:
     return int(_math.ceil(span)) if _math.isfinite(span) else sys.maxsize
 
 
+def _size(a: Any) -> int:
+    """Elements of ``a`` as an array, without making one of a nested list (see :mod:`.sizes`)."""
+    return array_elements(a, sys.maxsize) if isinstance(a, (list, tuple, _np.ndarray)) else 1
+
+
 def _repeat_len(a: Any, repeats: Any, *args: Any, **kwargs: Any) -> int:
-    return int(_np.size(a)) * (int(_np.max(repeats)) if _np.size(repeats) else 0)
+    most = max(repeats) if isinstance(repeats, (list, tuple)) and repeats else repeats
+    return _size(a) * (int(_np.max(most)) if _size(most) else 0)
 
 
 def _like_len(a: Any, *args: Any, shape: Any = None, **kwargs: Any) -> int:
-    return _n_elements(shape) if shape is not None else int(_np.size(a))
+    return _n_elements(shape) if shape is not None else _size(a)
 
 
 _BinaryOp = Callable[[Any, Any], Any]
@@ -159,6 +165,10 @@ def _growth(obj: Any, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) 
             return _repeat_len(obj, *args, **kwargs)
         if name == "resize":
             return _n_elements(args[0] if len(args) == 1 else args)
+        if name == "dot":
+            return dot_elements(obj, args[0] if args else kwargs["b"])
+        if name == "clip":
+            return broadcast_elements(obj, *args, *kwargs.values())
         return 0
     if name == "expandtabs":
         return len(obj) * max(operator.index(args[0] if args else kwargs.get("tabsize", 8)), 1)
@@ -182,22 +192,74 @@ _NP_ALLOCATORS: dict[str, Callable[..., int]] = {
     "identity": lambda n, *a, **k: operator.index(n) ** 2,
     "arange": _arange_len,
     "linspace": lambda start, stop, num=50, *a, **k: operator.index(num),
-    "tile": lambda A, reps, **k: int(_np.size(A)) * _n_elements(reps),
+    "tile": lambda A, reps, **k: _size(A) * _n_elements(reps),
     "repeat": _repeat_len,
     "zeros_like": _like_len,
     "ones_like": _like_len,
     "full_like": _like_len,
 }
+def _array_len(obj: Any, dtype: Any = None, *args: Any, **kwargs: Any) -> int:
+    """``np.array(obj, dtype)``: the elements of ``obj`` (eight-byte words: wide strings count more),
+    times the words of one ``dtype`` item when one is given."""
+    dtype = kwargs.get("dtype", dtype)
+    n = _size(obj)
+    if dtype is not None:
+        try:
+            n *= max(1, -(-_np.dtype(dtype).itemsize // 8))
+        except TypeError:
+            pass  # not a dtype: numpy raises its own error
+    return n
+
+
+def _stacked_len(arrays: Any, *args: Any, **kwargs: Any) -> int:
+    """``np.concatenate`` / ``stack`` / ...: every element of every array listed (an array listed
+    many times counts each time)."""
+    return _size(arrays)
+
+
+def _broadcast_len(*args: Any, **kwargs: Any) -> int:
+    """An element-wise function of its array arguments: their broadcast result."""
+    operands = [a for a in (*args, *kwargs.values()) if isinstance(a, (list, tuple, _np.ndarray, _np.generic))]
+    return broadcast_elements(*operands) if operands else 1
+
+
+def _where_len(condition: Any, *args: Any, **kwargs: Any) -> int:
+    if not args:  # np.where(condition): the indices of the true elements, one array per axis
+        return _size(condition) * max(1, _np.ndim(condition) if isinstance(condition, _np.ndarray) else 1)
+    return broadcast_elements(condition, *args)
+
+
+def _dot_len(a: Any, b: Any, *args: Any, **kwargs: Any) -> int:
+    return dot_elements(a, b)
+
+
+def _interp_len(x: Any, *args: Any, **kwargs: Any) -> int:
+    return _size(x)
+
+
+_NP_SIZED: dict[str, Callable[..., int]] = {
+    "array": _array_len, "asarray": _array_len,
+    "concatenate": _stacked_len, "stack": _stacked_len, "vstack": _stacked_len, "hstack": _stacked_len,
+    "column_stack": _stacked_len,
+    "arctan2": _broadcast_len, "mod": _broadcast_len, "maximum": _broadcast_len, "minimum": _broadcast_len,
+    "hypot": _broadcast_len, "isclose": _broadcast_len, "allclose": _broadcast_len, "clip": _broadcast_len,
+    "cross": _broadcast_len, "where": _where_len, "dot": _dot_len, "interp": _interp_len,
+}
+"""numpy functions whose result can be larger than any one argument, by the size of that result;
+every other function of the facade makes at most arrays of its arguments' sizes."""
+_NP_WHOLE_FIRST = frozenset({"array", "asarray", "concatenate", "stack", "vstack", "hstack", "column_stack"})
+"""Functions whose size above already counts everything made of their first argument."""
 _NP_PLAIN = (
-    "array", "asarray", "mean", "median", "std", "var", "sum", "prod", "min", "max", "argmin",
+    "mean", "median", "std", "var", "sum", "prod", "min", "max", "argmin",
     "argmax", "argsort", "sort", "abs", "absolute", "sqrt", "square", "exp", "log", "sin", "cos",
-    "tan", "arctan", "arctan2", "arcsin", "arccos", "deg2rad", "rad2deg", "radians", "degrees",
-    "clip", "round", "floor", "ceil", "sign", "mod", "concatenate", "stack", "vstack", "hstack",
-    "column_stack", "where", "dot", "cross", "isclose", "allclose", "all", "any", "unique",
-    "diff", "cumsum", "maximum", "minimum", "hypot", "reshape", "transpose", "expand_dims",
-    "squeeze", "flip", "isnan", "isfinite", "nonzero", "argwhere", "count_nonzero", "interp",
-    "float32", "float64", "int32", "int64", "bool_", "pi", "inf", "nan", "e", "newaxis",
+    "tan", "arctan", "arcsin", "arccos", "deg2rad", "rad2deg", "radians", "degrees",
+    "round", "floor", "ceil", "sign", "all", "any", "unique",
+    "diff", "cumsum", "reshape", "transpose", "expand_dims",
+    "squeeze", "flip", "isnan", "isfinite", "nonzero", "argwhere", "count_nonzero",
 )
+"""numpy functions whose result is at most as large as their arguments as arrays."""
+_NP_SCALAR_TYPES = ("float32", "float64", "int32", "int64", "bool_")
+_NP_CONSTANTS = ("pi", "inf", "nan", "e", "newaxis")
 _MATH_INT_CAPS = {"factorial": 20_000, "comb": 100_000, "perm": 100_000}
 _ITERTOOLS = (
     "permutations", "combinations", "combinations_with_replacement", "product", "islice",
@@ -206,18 +268,36 @@ _ITERTOOLS = (
 )
 
 
-def _guarded(session: _Session, fn: Callable[..., Any], size: Callable[..., int],
-             label: str) -> Callable[..., Any]:
+def _guarded(session: _Session, fn: Callable[..., Any], size: Callable[..., int] | None,
+             label: str, *, whole_first: bool = False) -> Callable[..., Any]:
+    """``fn`` that first counts the arrays numpy makes of its nested-list arguments (but the first
+    with ``whole_first``: ``size`` counts it) and the result ``size(*args, **kwargs)`` says it
+    makes (None: no result larger than its arguments)."""
     @_wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
+        session.check_inputs((*args[1 if whole_first else 0:], *kwargs.values()), label)
         try:
-            n = size(*args, **kwargs)
-        except (TypeError, ValueError, OverflowError, ZeroDivisionError):
+            n = size(*args, **kwargs) if size is not None else 0
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError, IndexError, KeyError):
             n = 0  # malformed arguments: the real function raises its own error
         session.allocate(n, label)
         return fn(*args, **kwargs)
 
     return wrapper
+
+
+class _ScalarType(_TypeCheck):
+    """``np.float64`` and its kin: ``isinstance``, ``dtype=`` and comparison as the real type, and a
+    call (``np.float64([[...]])`` makes an array) counted like ``np.array``."""
+
+    __slots__ = ("_call", "dtype")
+
+    def __init__(self, real: type, name: str, call: Callable[..., Any]) -> None:
+        super().__init__(real, name)
+        self._call, self.dtype = call, _np.dtype(real)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:  # type: ignore[override]
+        return self._call(*args, **kwargs)
 
 
 def _size_kw(size: Any = None, **_: Any) -> int:
@@ -251,7 +331,7 @@ def _random_facade(session: _Session, rng: _np.random.Generator) -> _Facade:
                    lambda a, size=None, **k: max(_size_kw(size), operator.index(a)
                                                 if isinstance(a, int) else 0)),
         "permutation": (lambda x: rng.permutation(x),
-                        lambda x: operator.index(x) if isinstance(x, int) else int(_np.size(x))),
+                        lambda x: operator.index(x) if isinstance(x, int) else _size(x)),
         "shuffle": (lambda x: rng.shuffle(x), lambda x: 0),
     }
     members: dict[str, object] = {name: _guarded(session, fn, size, f"np.random.{name}()")
@@ -292,12 +372,19 @@ def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
     import shapely.affinity
     import shapely.geometry
 
-    np_members: dict[str, object] = {name: getattr(_np, name) for name in _NP_PLAIN}
-    for name, size in _NP_ALLOCATORS.items():
-        np_members[name] = _guarded(session, getattr(_np, name), size, f"np.{name}()")
+    np_members: dict[str, object] = {name: getattr(_np, name) for name in _NP_CONSTANTS}
+    for name in _NP_PLAIN:
+        np_members[name] = _guarded(session, getattr(_np, name), None, f"np.{name}()")
+    for name, size in {**_NP_SIZED, **_NP_ALLOCATORS}.items():
+        np_members[name] = _guarded(session, getattr(_np, name), size, f"np.{name}()",
+                                    whole_first=name in _NP_WHOLE_FIRST)
+    for name in _NP_SCALAR_TYPES:
+        real = getattr(_np, name)
+        np_members[name] = _ScalarType(real, f"np.{name}", _guarded(session, real, _array_len, f"np.{name}()",
+                                                                     whole_first=True))
     np_members["ndarray"] = _TypeCheck(_np.ndarray, "np.ndarray")
     np_members["random"] = _random_facade(session, rng)
-    np_members["linalg"] = _Facade("np.linalg", {n: getattr(_np.linalg, n)
+    np_members["linalg"] = _Facade("np.linalg", {n: _guarded(session, getattr(_np.linalg, n), None, f"np.linalg.{n}()")
                                                 for n in ("norm", "inv", "det", "solve")})
 
     geometry = {n: getattr(shapely.geometry, n)
@@ -355,16 +442,24 @@ def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
     """A fresh curated builtins dict: tampering in one run cannot reach the next."""
     table: dict[str, object] = {n: getattr(_builtins_module, n) for n in _SAFE_BUILTINS}
     printed = [0]
+    cap = session.budget.max_text_chars
 
-    def captured_print(*args: object, sep: str | None = " ", end: str | None = "\n",
+    def captured_print(*args: object, sep: object = " ", end: object = "\n",
                        file: object = None, flush: bool = False) -> None:
-        text = (" " if sep is None else str(sep)).join(str(a) for a in args)
-        if end not in (None, "\n"):
-            text += str(end)
-        if output is None or printed[0] > _MAX_PRINT_CHARS:
-            return
+        if output is None:
+            return  # nobody reads it: no text is made
+        pieces: list[str] = []
+        room = cap - printed[0]
+        for a in (" " if sep is None else sep, "" if end in (None, "\n") else end, *args):
+            piece = capped_text(a, room)
+            if piece is None or (room := room - len(piece) * (max(len(args) - 1, 0) if not pieces else 1)) < 0:
+                session.abort(f"print() output would pass {cap} characters of text in this run (max_text_chars)",
+                              TextBudgetExceeded)
+            pieces.append(str(piece))
+        separator, ending, *values = pieces
+        text = separator.join(values) + ending
         printed[0] += len(text)
-        output.append(text if printed[0] <= _MAX_PRINT_CHARS else "[print output truncated]")
+        output.append(text)
 
     table["print"] = captured_print
     table["range"] = session.capped_range

@@ -10,7 +10,12 @@ from __future__ import annotations
 
 import types
 
+from capmj.agents.sandbox.sizes import preview
 from capmj.errors import PlanError, error_name
+
+MAX_DETAIL_CHARS = 10_000
+"""Most characters of an error's message shown (an error raised with a huge plan value in it is
+cut, and its full text is never made)."""
 
 
 def line_of(tb: types.TracebackType | None, filename: str) -> int | None:
@@ -79,5 +84,5 @@ def describe(exc: BaseException) -> str:
         where = f"{program} for this line" + (f", line {line}{_region(code, line)}" if line else "")
         quoted = _quote(code, line)
         return f"in {where}" + (f": `{quoted}`" if quoted else "") + f": {exc.detail}"  # type: ignore[attr-defined]
-    detail = str(exc) if str(exc) else repr(exc)
+    detail = preview(exc, MAX_DETAIL_CHARS, as_repr=False) or preview(exc, MAX_DETAIL_CHARS)
     return f"{error_name(exc)}: {detail}"

@@ -38,10 +38,10 @@ def _execute(session: _Session, thunk: Callable[[], Any]) -> Any:
     sys.settrace(session.global_trace)
     try:
         return thunk()
-    except _Abort as exc:
+    except _Abort as exc:  # a budget or a refusal: the class recorded is that of exc.error
         line = line_of(exc.__traceback__, session.filename)
-        raise located_error(BudgetExceeded, f"BudgetExceeded: {exc}", line=line, code=session.code,
-                            program=session.program) from None
+        raise located_error(type(exc.error), exc.text, line=line, code=session.code,
+                            program=session.program) from exc.error
     except Exception as exc:  # anything the code raised, including errors of env functions
         line = line_of(exc.__traceback__, session.filename)
         kind = BudgetExceeded if isinstance(exc, BudgetExceeded) else PlanError
