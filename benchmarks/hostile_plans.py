@@ -5,7 +5,8 @@ sandbox, the planner API, MuJoCo physics, the episode record and its failure lab
 is scripted: a :class:`ScriptedClient` answers each LMP with the fixture's code for it, and
 records the key it would hand litellm.  Each fixture runs in a fresh process (``--one NAME``), so
 ``peak_mb`` is that episode's process peak (``ru_maxrss``; the interpreter with capmj, numpy and
-MuJoCo imported is most of it).  The secret fixtures plant ``OPENAI_API_KEY`` in the process's
+MuJoCo imported is most of it, about 120 MB, and litellm, imported to find a provider's key, adds
+about 140 MB to the secret fixtures).  The secret fixtures plant ``OPENAI_API_KEY`` in the process's
 environment first and take it out as the bench does (:func:`capmj.llm.keys.take_secrets`); their
 row says whether the key stayed out of the environment while plan code ran, reached every LLM
 request, and appears nowhere in the episode's record.
@@ -96,10 +97,12 @@ def run_one(fixture: HostilePlan) -> dict[str, Any]:
     except PlanError:
         static = True
     error = " ".join((result.error or "").split())
+    head, sep, detail = error.partition(": ")  # the recorded text starts with the class it is shown as
+    detail = detail if sep and head.isidentifier() else error
     row: dict[str, Any] = {
         "fixture": fixture.name,
         "stopped_by": layer_of(result.error_type, error, static=static),
-        "error": f"{result.error_type}: {error[:300]}" if result.error_type else None,
+        "error": f"{result.error_type}: {detail[:300]}" if result.error_type else None,
         "peak_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
         "expected": f"{fixture.layer}: {fixture.expected}",
         "failure": classify(record),
