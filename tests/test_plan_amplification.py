@@ -122,10 +122,16 @@ def test_print_output_is_unchanged() -> None:
 
 @pytest.mark.parametrize("line", ["s = str(c)", "s = repr(c)", "s = f'{c}'", "s = f'{c!r:>5}'", "s = '{}'.format(c)",
                                   "s = '{x}'.format_map({'x': c})", "s = str.format('{}', c)", "s = '%s' % (c,)",
-                                  "s = '%r' % [c]"])
+                                  "s = '%r' % [c]", "s = str(object=c)", "s = list(map(repr, [c]))",
+                                  "s = ', '.join(str(b) for b in c)"])
 def test_text_of_a_reused_inner_list_is_refused(line: str) -> None:
     error = refused(ALIASED + line + "\n", TextBudgetExceeded)
     assert "max_text_chars" in str(error)
+
+
+def test_joining_texts_made_through_an_alias_stops_early() -> None:
+    error = refused(ALIASED + "s = ''.join(map(str, c))\n", BudgetExceeded)  # str(b): 3 MB each, 100 of them
+    assert ".join()" in str(error)
 
 
 def test_small_texts_are_made_as_before() -> None:

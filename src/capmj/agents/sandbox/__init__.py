@@ -32,8 +32,8 @@ So each run goes through four layers:
 Everything surfaces as :class:`PlanError` / :class:`BudgetExceeded` ("ErrorClass: message",
 1-based line in the submitted code).  Known gaps, on purpose: C-level work that is slow but
 bounded (big numpy ops, ``shapely`` buffers with huge resolutions, format widths like
-``f"{x:>1000000000}"``) is not interruptible; text made through an alias of a builtin
-(``s = str; s(x)``, ``map(str, xs)``) is not counted; run plans in a subprocess with a memory
+``f"{x:>1000000000}"``) is not interruptible; text made by ``str`` called through an alias
+(``s = str; s(x)``, ``map(str, xs)``, ``sorted(xs, key=str)``) is not counted; run plans in a subprocess with a memory
 limit for hard isolation.
 """
 

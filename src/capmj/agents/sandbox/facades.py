@@ -462,6 +462,7 @@ def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
         output.append(text)
 
     table["print"] = captured_print
+    table["repr"] = session.checked_repr
     table["range"] = session.capped_range
     table["set"], table["frozenset"] = OrderedSet, OrderedFrozenSet
     table["type"] = _safe_type(table)

@@ -322,9 +322,16 @@ class _Session:
     def text_call(self, fn: Any, *args: Any, **kwargs: Any) -> Any:
         """``fn(*args, **kwargs)`` for a call written ``str(x)`` or ``repr(x)``: when ``fn`` is the
         builtin, the size of the text is checked first."""
-        if (fn is str or fn is repr) and len(args) == 1 and not kwargs:
-            self.check_text(args[0], f"{fn.__name__}()", as_repr=fn is repr)
+        if fn is str and len(args) + len(kwargs) == 1 and (args or "object" in kwargs):
+            self.check_text(args[0] if args else kwargs["object"], "str()")
+        elif fn is repr and len(args) == 1 and not kwargs:
+            self.check_text(args[0], "repr()", as_repr=True)
         return fn(*args, **kwargs)
+
+    def checked_repr(self, value: Any) -> str:
+        """The builtin ``repr`` of plan code (also when passed around: ``map(repr, xs)``)."""
+        self.check_text(value, "repr()", as_repr=True)
+        return repr(value)
 
     def checked_format(self, template: Any, method: Callable[..., Any], name: str) -> Callable[..., Any]:
         """``template.format`` / ``.format_map`` (or ``str.format`` itself, ``template`` None):
@@ -370,9 +377,12 @@ class _Session:
         @_wraps(value)
         def checked(*args: Any, **kwargs: Any) -> Any:
             if name == "join" and args:
-                items = list(args[0])
-                total = sum(len(i) for i in items if isinstance(i, _SEQUENCES))
-                self.allocate(total + len(obj) * max(len(items) - 1, 0), f".{name}()")
+                items, total = [], 0
+                for item in args[0]:  # counted as they come: a generator of big texts stops early
+                    items.append(item)
+                    total += (len(item) if isinstance(item, _SEQUENCES) else 0) + (len(obj) if len(items) > 1 else 0)
+                    self.limit(total, f".{name}()")
+                self.allocate(total, f".{name}()")
                 return value(items, *args[1:], **kwargs)
             try:
                 n = _growth(obj, name, args, kwargs)
