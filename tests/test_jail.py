@@ -122,7 +122,7 @@ def _alive(pid: int) -> bool:
 
 
 def test_jailed_processes_are_gone_when_their_parent_is_killed(tmp_path):
-    """kill -9 of the process holding a ConfinedTask: its jailed processes (current and spare) end too."""
+    """kill -9 of the process holding a ConfinedTask: every process of its jail ends too."""
     parent = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
         import sys, time
         from capmj.confine.proxy import ConfinedTask, ModuleSource
@@ -133,9 +133,9 @@ def test_jailed_processes_are_gone_when_their_parent_is_killed(tmp_path):
     """)], stdout=subprocess.PIPE, text=True)
     try:
         assert parent.stdout is not None
-        assert int(parent.stdout.readline()) == 2  # the process in use and its spare
+        assert int(parent.stdout.readline()) == 1  # one task process, forked by the jail's fork server
         jailed = _descendants(parent.pid)
-        assert len(jailed) >= 4, jailed  # per jail: bwrap, its init in the PID namespace, the interpreter
+        assert len(jailed) >= 4, jailed  # bwrap, its init, the fork server, the task process
         os.kill(parent.pid, signal.SIGKILL)
         parent.wait(timeout=10)
         deadline = time.monotonic() + 10
@@ -216,7 +216,7 @@ def test_a_fresh_process_per_episode_keeps_a_call_counting_sleeper_asleep():
     from capmj.taskcheck import IdleAgent
 
     assert SLEEPER != GOOD
-    task = ConfinedTask(ModuleSource(MODULE, SLEEPER), spare=False)
+    task = ConfinedTask(ModuleSource(MODULE, SLEEPER))
     try:
         results = [run_episode(task, seed, IdleAgent()) for seed in range(4)]
         assert [r.success for r in results] == [False] * 4  # in one process it would lie from the 4th call
@@ -229,16 +229,38 @@ def test_a_fresh_process_per_episode_keeps_a_call_counting_sleeper_asleep():
         task.close()
 
 
+def test_the_tmpfs_is_emptied_between_episodes():
+    """A sleeper that counts episodes in a file of its tmpfs finds its file gone at each new episode
+    (the only way state could outlive a task process in the jail)."""
+    counting = GOOD.replace("    def evaluate(self, scene: Scene, state: SceneState) -> Verdict:\n",
+                            "    def evaluate(self, scene: Scene, state: SceneState) -> Verdict:\n"
+                            "        _b = __builtins__ if isinstance(__builtins__, dict) else vars(__builtins__)\n"
+                            "        with _b['open']('/tmp/episodes', 'a') as f:\n"
+                            "            f.write('x')\n"
+                            "        n = len(_b['open']('/tmp/episodes').read())\n"
+                            "        return Verdict(n > 1, 0.0, (f'episodes seen: {n}',))\n")
+    assert counting != GOOD
+    task = ConfinedTask(ModuleSource(MODULE, counting), guard=False)  # the guard would refuse the write
+    try:
+        seen = []
+        for seed in range(3):
+            scene = make_scene(task, seed)
+            seen.append(task.evaluate(scene, SceneState.from_specs(scene.objects)).diagnostics)
+        assert seen == [("episodes seen: 1",)] * 3 and task.started == 3 and task.jails == 1
+    finally:
+        task.close()
+
+
 def test_limits_and_failures_of_the_jailed_code_are_named():
     slow = GOOD.replace("        k = int(rng.integers(2, 4))", "        while True:\n            pass")
-    task = ConfinedTask(ModuleSource(MODULE, slow), jail.Limits(cpu_s=2, wall_s=30), spare=False)
+    task = ConfinedTask(ModuleSource(MODULE, slow), jail.Limits(cpu_s=2, wall_s=30))
     with pytest.raises(ConfinedTaskError, match="CPU-time limit of 2 s"):
         make_scene(task, 0)
-    broken = ConfinedTask(ModuleSource(MODULE, GOOD.replace("TASK = ", "TASK_ = ")), spare=False)
+    broken = ConfinedTask(ModuleSource(MODULE, GOOD.replace("TASK = ", "TASK_ = ")))
     with pytest.raises(ConfinedTaskError, match="defines no TASK"):
         broken.load()
     raising = GOOD.replace("        k = int(rng.integers(2, 4))", "        raise KeyError('no zone')")
-    task = ConfinedTask(ModuleSource(MODULE, raising), spare=False)
+    task = ConfinedTask(ModuleSource(MODULE, raising))
     with pytest.raises(ConfinedTaskError, match="KeyError: 'no zone'") as info:
         make_scene(task, 0)
     assert info.value.remote_type == "KeyError" and any("sample_scene" in n for n in info.value.__notes__)

@@ -1,19 +1,16 @@
-"""The jailed side: ``python -m capmj.confine.host``, the only process that runs generated task code.
+"""A task process: the only code that runs generated task code, one fresh process per episode.
 
-Started by :class:`capmj.confine.proxy.ConfinedTask` inside the jail (:mod:`capmj.confine.jail`),
-it speaks frames (:mod:`capmj.confine.wire`) on its stdin and stdout and nothing else:
+Forked inside the jail by :mod:`capmj.confine.forkserver` (which has imported the task API and
+whose child has installed the seccomp filter: no process, no program, no socket), it answers
+frames (:mod:`capmj.confine.wire`) relayed by the fork server:
 
-1. Trusted start-up: import the task API (numpy, the protocol, spawn, predicates), move the
-   channel to private descriptors and point descriptors 0 and 1 at ``/dev/null`` (what the task
-   prints goes to stderr, which the parent keeps a bounded tail of), install the seccomp filter
-   (no process, no program, no socket from here on).
-2. ``load``: the parent sends the module's exact text and its final module name (the name it has
-   once installed, so nothing distinguishes a check from a later run).  The audit-hook guard is
-   installed first (an early, explained rejection of what the static check missed; the jail is
-   the boundary, not the guard — the parent may switch it off to measure the jail alone).  The text is compiled here
-   from the string — never from a file, so no ``.pyc`` is ever read — and run; the answer is the
-   task's facts: name, tags, docstring and which protocol methods it has.
-3. Calls: ``sample_scene`` (with the PCG64 state of the caller's generator, returning the scene and
+1. ``load``: the module's exact text and its final module name (the name it has once installed,
+   so nothing distinguishes a check from a later run).  The audit-hook guard is installed first
+   when asked (an early, explained rejection of what the static check missed; the jail is the
+   boundary, not the guard — the parent may switch it off to measure the jail alone).  The text is
+   compiled from the string — never from a file, so no ``.pyc`` is ever read — and run; the answer
+   is the task's facts: name, tags, docstring and which protocol methods it has.
+2. Calls: ``sample_scene`` (with the PCG64 state of the caller's generator, returning the scene and
    the advanced state), ``oracle_goals`` and ``evaluate``; each answer is data, or an error with the
    exception's class, message and a traceback tail.
 
@@ -25,7 +22,6 @@ from __future__ import annotations
 
 import inspect
 import json
-import os
 import sys
 import traceback
 from types import ModuleType
@@ -33,6 +29,8 @@ from typing import IO, Any, Callable
 
 from capmj.confine import wire
 
+OPS = ("load", "sample_scene", "oracle_goals", "evaluate")
+"""The requests a task process answers."""
 _KEPT_SCENES = 64
 CANDIDATE_FILE = "<generated task>"
 """The file name the module's code carries (in tracebacks, and for the guard: code from here is the task's)."""
@@ -131,28 +129,13 @@ class Host:
         return {"verdict": wire.verdict_to_wire(v)}
 
 
-def _private_channel() -> tuple[IO[bytes], IO[bytes]]:
-    """The frame channel on descriptors of its own; 0 and 1 now lead to ``/dev/null``."""
-    inp, out = os.fdopen(os.dup(0), "rb", buffering=0), os.fdopen(os.dup(1), "wb")
-    null = os.open(os.devnull, os.O_RDWR)
-    os.dup2(null, 0)
-    os.dup2(2, 1)  # a task's print goes where stderr goes
-    os.close(null)
-    sys.stdin = open(os.devnull, encoding="utf-8")  # noqa: SIM115 - for the life of the process
-    return inp, out
+def serve(inp: IO[bytes], out: IO[bytes]) -> None:
+    """Answer frames on ``inp``/``out`` until the channel closes (the task process's whole life).
 
-
-def main() -> int:
-    # trusted start-up: everything the task API needs, before any generated code exists here
-    import numpy  # noqa: F401
-
-    import capmj.tasks.predicates  # noqa: F401
-    import capmj.tasks.protocol  # noqa: F401
-    import capmj.tasks.spawn  # noqa: F401
-    from capmj.confine import guard, seccomp
-
-    inp, out = _private_channel()
-    seccomp.install()
+    Runs in a fresh child of :mod:`capmj.confine.forkserver`, which has installed the seccomp
+    filter; the guard is installed by ``load`` when the parent asks for it.
+    """
+    from capmj.confine import guard
 
     def report(event: dict[str, Any]) -> None:
         v = event["violation"]
@@ -163,10 +146,10 @@ def main() -> int:
         try:
             msg = wire.read_frame(inp, wire.MAX_TO_JAIL)
         except wire.WireError:
-            return 0  # the parent closed the channel
+            return  # the fork server closed the channel
         op = msg.get("op")
         try:
-            answer = getattr(host, str(op))(msg) if op in ("load", "sample_scene", "oracle_goals", "evaluate") \
+            answer = getattr(host, str(op))(msg) if op in OPS \
                 else {"error": {"type": "WireError", "message": f"unknown op {op!r}", "traceback": ""}}
         except BaseException as e:  # noqa: BLE001 - the task's failure is the answer
             answer = _error(e)
@@ -176,5 +159,4 @@ def main() -> int:
             wire.write_frame(out, _error(e))
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+__all__ = ["CANDIDATE_FILE", "Host", "OPS", "serve"]

@@ -117,12 +117,22 @@ def _rlimits(limits: Limits):  # type: ignore[no-untyped-def]
     return apply
 
 
+NOT_INSTALLED = ("bubblewrap is not installed; LLM-written task code runs only inside it "
+                 "(Debian/Ubuntu: sudo apt-get install bubblewrap)")
+
+
+def refused(bwrap_message: str) -> str:
+    """The explanation of a jail bwrap could not create (``bwrap_message``: its own last line)."""
+    return (f"bubblewrap cannot create the jail here ({bwrap_message}); it needs user namespaces "
+            "(sysctl kernel.unprivileged_userns_clone=1, or a container that allows them)")
+
+
 @functools.cache
 def problem() -> str | None:
-    """Why this machine cannot jail a process (``None``: it can).  Tried once per process."""
+    """Why this machine cannot jail a process (``None``: it can).  Tried once per process, by
+    starting one jailed interpreter."""
     if shutil.which(BWRAP) is None:
-        return ("bubblewrap is not installed; LLM-written task code runs only inside it "
-                "(Debian/Ubuntu: sudo apt-get install bubblewrap)")
+        return NOT_INSTALLED
     try:
         probe = subprocess.run(jail_command([sys.executable, "-I", "-c", "pass"]), capture_output=True, timeout=60,
                                stdin=subprocess.DEVNULL)
@@ -130,8 +140,7 @@ def problem() -> str | None:
         return f"bubblewrap could not be started: {type(e).__name__}: {e}"
     if probe.returncode != 0:
         err = probe.stderr.decode(errors="replace").strip().splitlines()[-1:] or ["no message"]
-        return (f"bubblewrap cannot create the jail here ({err[0]}); it needs user namespaces "
-                "(sysctl kernel.unprivileged_userns_clone=1, or a container that allows them)")
+        return refused(err[0])
     return None
 
 
@@ -143,10 +152,15 @@ def require() -> None:
 
 
 def start(argv: Sequence[str], limits: Limits, stderr: IO[bytes]) -> subprocess.Popen[bytes]:
-    """Start ``argv`` jailed under ``limits``, speaking on its stdin/stdout pipes."""
-    require()
+    """Start ``argv`` jailed under ``limits``, speaking on its stdin/stdout pipes.
+
+    Only whether ``bwrap`` is installed is checked first (:class:`ConfinementError` if not); a jail
+    bwrap then cannot create ends at once with bwrap's own message on ``stderr`` (:func:`refused`
+    words it), so a run pays for no probe."""
+    if shutil.which(BWRAP) is None:
+        raise ConfinementError(NOT_INSTALLED)
     return subprocess.Popen(jail_command(argv, limits), stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr,
                             preexec_fn=_rlimits(limits), close_fds=True, env={})
 
 
-__all__ = ["CLEAN_ENV", "Limits", "NOBODY", "TMP", "jail_command", "problem", "require", "start"]
+__all__ = ["CLEAN_ENV", "Limits", "NOBODY", "NOT_INSTALLED", "TMP", "jail_command", "problem", "refused", "require", "start"]

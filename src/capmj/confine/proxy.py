@@ -2,16 +2,18 @@
 jailed process and believes only validated data.
 
 capmj never imports generated code.  :class:`ConfinedTask` holds the module's exact text and
-final module name (:class:`ModuleSource`) and implements the task protocol by asking a jailed
-:mod:`capmj.confine.host`: ``sample_scene`` sends the caller's generator state and sets the
+final module name (:class:`ModuleSource`) and implements the task protocol by asking a task
+process (:mod:`capmj.confine.host`) in its jail: ``sample_scene`` sends the caller's generator state and sets the
 advanced state it gets back (a seed still maps to exactly one scene, as in-process), and the
 scene, goals and verdict come back through :mod:`capmj.confine.wire`.  The physics, the oracle,
 every check and every record stay in capmj's process; the jail only answers questions.
 
-**A fresh process per episode.**  Once a process has answered ``oracle_goals`` or ``evaluate``,
-the next ``sample_scene`` — the start of the next episode — goes to a new process, so state a
-task keeps between calls (a call counter, a patched module) never outlives one episode.  To keep
-that cheap, a spare process is started (and loads the module) while the current one works.
+**A fresh process per episode.**  Once a task process has answered ``oracle_goals`` or
+``evaluate``, the next ``sample_scene`` — the start of the next episode — goes to a new one, so
+state a task keeps between calls (a call counter, a patched module, a file in its tmpfs) never
+outlives one episode.  The jail's fork server (:mod:`capmj.confine.forkserver`) makes that cheap:
+a ``fork`` of an interpreter that has the task API imported, not a new interpreter.  A jail that
+times out or dies is replaced by a new one.
 
 **Facts.**  A loaded task states its name, tags, docstring and protocol methods.  For an
 installed package the manifest holds the facts accepted at generation (``expected``); a process
@@ -43,7 +45,7 @@ from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
 from capmj.tasks.scene_method import DEPRECATED_SCENE_METHOD, SCENE_METHOD
 
-HOST = ("-I", "-B", "-m", "capmj.confine.host")
+FORKSERVER = ("-I", "-B", "-m", "capmj.confine.forkserver")
 """How the jailed interpreter is started (isolated mode: no environment, no user site, no cwd on
 the path; ``-B``: it writes no bytecode)."""
 _FACT_ATTRIBUTES = frozenset({"name", "tags", SCENE_METHOD, DEPRECATED_SCENE_METHOD, "oracle_goals", "evaluate"})
@@ -97,40 +99,38 @@ class TaskFacts:
         return cls(name, None if tags is None else tuple(tags), doc, {k: methods[k] for k in sorted(methods)[:8]})
 
 
-def _why_ended(returncode: int | None, limits: jail.Limits, timed_out: bool) -> str:
+def _why_ended(limits: jail.Limits, *, signum: int | None = None, exit_code: int | None = None,
+               timed_out: bool = False) -> str:
+    """Why a task process (or the whole jail) ended, naming the limit that ended it."""
     if timed_out:
         return f"killed: wall-clock limit of {limits.wall_s:g} s exceeded"
-    if returncode is not None and returncode > 128:  # bwrap reports a child killed by a signal as 128 + signal
-        sig = returncode - 128
-        if sig in (signal.SIGXCPU, signal.SIGKILL):
-            return f"killed: CPU-time limit of {limits.cpu_s} s exceeded ({signal.Signals(sig).name})"
-        return f"killed by signal {signal.Signals(sig).name}" if sig in signal.valid_signals() else f"exit {returncode}"
-    if returncode == VIOLATION_EXIT:
+    if signum is not None:
+        if signum in (signal.SIGXCPU, signal.SIGKILL):
+            return f"killed: CPU-time limit of {limits.cpu_s} s exceeded ({signal.Signals(signum).name})"
+        if signum == signal.SIGXFSZ:
+            return f"killed: file-size limit of {limits.tmpfs_mb} MiB exceeded (SIGXFSZ)"
+        return f"killed by signal {signal.Signals(signum).name}" if signum in signal.valid_signals() else f"signal {signum}"
+    if exit_code == VIOLATION_EXIT:
         return "ended by the runtime guard"
-    return f"the jailed process exited with code {returncode}"
+    return f"the task process exited with code {exit_code}"
 
 
-class _Jailed:
-    """One jailed host process and its frame channel."""
+class _Jail:
+    """One jail: bwrap around the fork server, its frame channel, and the task process it serves."""
 
     def __init__(self, source: ModuleSource, limits: jail.Limits, guard: bool) -> None:
         self.limits = limits
         self.stderr: IO[bytes] = tempfile.TemporaryFile(prefix="capmj-jail-")  # noqa: SIM115 - closed in close()
-        self.proc = jail.start([sys.executable, *HOST], limits, self.stderr)
-        self.calls = 0
-        self.facts: TaskFacts | None = None
+        self.proc = jail.start([sys.executable, *FORKSERVER], limits, self.stderr)
+        self.child_alive = False
         self._send({"op": "load", "module": source.module, "text": source.text, "guard": guard})
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
 
     def _send(self, message: Mapping[str, Any]) -> None:
         assert self.proc.stdin is not None
         try:
             wire.write_frame(self.proc.stdin, message)
         except (BrokenPipeError, OSError):
-            pass  # the process is gone; the read that follows says why
+            pass  # the jail is gone; the read that follows says why
 
     def _read_exact(self, n: int, deadline: float) -> bytes:
         assert self.proc.stdout is not None
@@ -146,39 +146,53 @@ class _Jailed:
             got += len(chunk)
         return b"".join(chunks)
 
-    def _tail(self) -> str:
+    def _tail(self) -> list[str]:
         try:
             self.stderr.seek(0, os.SEEK_END)
             size = self.stderr.tell()
             self.stderr.seek(max(0, size - MAX_STDERR))
-            return self.stderr.read().decode(errors="replace").strip()
+            return self.stderr.read().decode(errors="replace").strip().splitlines()[-3:]
         except (OSError, ValueError):
-            return ""
+            return []
 
-    def _ended(self, timed_out: bool) -> ConfinedTaskError:
-        self.kill()
-        why = _why_ended(self.proc.returncode, self.limits, timed_out)
-        tail = self._tail().splitlines()[-3:]
+    def _ended(self, why: str) -> ConfinedTaskError:
+        tail = self._tail()
         memory = any("MemoryError" in line for line in tail)
-        return ConfinedTaskError(f"{why}" + (f"; stderr: {' | '.join(tail)}" if tail else ""),
-                                 "MemoryError" if memory else None)
+        return ConfinedTaskError(why + (f"; stderr: {' | '.join(tail)}" if tail else ""), "MemoryError" if memory else None)
 
     def receive(self) -> dict[str, Any]:
-        """The next answer, or the error that explains why none came."""
+        """The next answer, or the error that explains why none came (the jail is killed on a
+        timeout, a closed channel or a malformed frame)."""
         deadline = time.monotonic() + self.limits.wall_s
         try:
             header = self._read_exact(4, deadline)
             answer = wire.decode_frame(self._read_exact(wire.frame_length(header, wire.MAX_FROM_JAIL), deadline))
         except TimeoutError:
-            raise self._ended(True) from None
+            self.kill()
+            raise self._ended(_why_ended(self.limits, timed_out=True)) from None
         except EOFError:
-            raise self._ended(False) from None
+            self.kill()
+            code = self.proc.returncode
+            bwrap = [line for line in self._tail() if line.startswith("bwrap:")]
+            if bwrap:  # the jail itself could not be made: not the task's fault
+                raise ConfinementError(jail.refused(bwrap[-1])) from None
+            raise self._ended(_why_ended(self.limits, signum=code - 128 if code and code > 128 else None,
+                                         exit_code=code)) from None
         except wire.WireError:
             self.kill()
             raise
+        self.child_alive = True
+        if "ended" in answer:  # the task process ended without answering; the fork server says how
+            self.child_alive = False
+            e = answer["ended"] if isinstance(answer["ended"], dict) else {}
+            if "wire" in e:
+                raise wire.WireError(str(e["wire"])[:300])
+            sig, code = e.get("signal"), e.get("exit")
+            raise self._ended(_why_ended(self.limits, signum=sig if isinstance(sig, int) else None,
+                                         exit_code=code if isinstance(code, int) else None))
         if "violation" in answer:
+            self.child_alive = False  # the guard ends the task process
             v = answer["violation"] if isinstance(answer["violation"], dict) else {}
-            self.kill()
             raise GuardRefused(str(v.get("event", "?"))[:100], str(v.get("detail", ""))[:400])
         if "error" in answer:
             e = answer["error"] if isinstance(answer["error"], dict) else {}
@@ -189,19 +203,25 @@ class _Jailed:
         return answer
 
     def call(self, message: Mapping[str, Any]) -> dict[str, Any]:
-        self.calls += 1
         self._send(message)
         return self.receive()
 
-    def hello(self) -> TaskFacts:
-        """The facts the loaded module states (waits for the answer to ``load``)."""
-        if self.facts is None:
-            self.facts = TaskFacts.from_dict(self.receive().get("facts"))
-        return self.facts
+    def facts(self) -> TaskFacts:
+        """The facts the freshly loaded module states (the answer to ``load`` or ``fresh``)."""
+        return TaskFacts.from_dict(self.receive().get("facts"))
+
+    def fresh(self) -> TaskFacts:
+        """A new task process in this jail, the tmpfs emptied, the module loaded again."""
+        self._send({"op": "fresh"})
+        return self.facts()
+
+    @property
+    def alive(self) -> bool:
+        return self.proc.poll() is None
 
     def kill(self) -> None:
         if self.proc.poll() is None:
-            self.proc.kill()  # bwrap dies; --die-with-parent and the PID namespace take the host with it
+            self.proc.kill()  # bwrap dies; --die-with-parent and the PID namespace take the rest with it
         try:
             self.proc.wait(timeout=10)
         except subprocess.TimeoutExpired:  # pragma: no cover - a process SIGKILL did not end
@@ -217,10 +237,10 @@ class _Jailed:
                 pass
 
 
-def _close_all(processes: list[_Jailed]) -> None:
-    for p in processes:
-        p.close()
-    processes.clear()
+def _close_all(jails: list[_Jail]) -> None:
+    for j in jails:
+        j.close()
+    jails.clear()
 
 
 class ConfinedTask:
@@ -229,7 +249,6 @@ class ConfinedTask:
     ``expected`` are the facts accepted at generation (from a manifest): the task's ``name``,
     ``tags`` and docstring come from them without starting a process, and a process that states
     different facts is refused.  Without them, the first access to a fact loads the module.
-    ``spare=False`` starts no spare process (one process at a time, each episode waits for its own);
     ``guard=False`` leaves the audit hook out of the jail (only to measure what the jail stops alone).
     """
 
@@ -238,18 +257,19 @@ class ConfinedTask:
     tags: frozenset[str]
 
     def __init__(self, source: ModuleSource, limits: jail.Limits | None = None, *,
-                 expected: TaskFacts | None = None, sample_goal: str | None = None, spare: bool = True,
-                 guard: bool = True) -> None:
-        self.source, self.limits, self.expected, self.use_spare = source, limits or jail.Limits(), expected, spare
-        self.sample_goal, self.guard = sample_goal, guard
+                 expected: TaskFacts | None = None, sample_goal: str | None = None, guard: bool = True) -> None:
+        self.source, self.limits, self.expected = source, limits or jail.Limits(), expected
+        self.sample_goal = sample_goal
         """A goal text recorded at acceptance (for listings that must not start a process)."""
+        self.guard = guard
         self._lock = threading.RLock()
-        self._current: _Jailed | None = None
-        self._spare: _Jailed | None = None
+        self._jail: _Jail | None = None
         self._episode_used = False
-        self._live: list[_Jailed] = []
+        self._live: list[_Jail] = []
         self.started = 0
-        """How many jailed processes this task has started (one per episode, plus spares)."""
+        """How many task processes this task has started (one per episode, and after a failure)."""
+        self.jails = 0
+        """How many jails (fork servers) it has started (one, unless a jail had to be killed)."""
         self.refusals: list[dict[str, str]] = []
         """The events the runtime guard refused (``event``, ``detail``), in order."""
         self._finalizer = weakref.finalize(self, _close_all, self._live)
@@ -282,79 +302,74 @@ class ConfinedTask:
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {attr!r}")
 
     def load(self) -> TaskFacts:
-        """Start the first process, load the module and return its facts (checked against
-        ``expected``).  Raises :class:`ConfinedTaskError` when the module fails to load."""
+        """Start the jail, load the module and return its facts (checked against ``expected``).
+        Raises :class:`ConfinedTaskError` when the module fails to load."""
         with self._lock:
-            return self._process().hello()
+            self._task_process()
+            assert self.expected is not None
+            return self.expected
 
     @property
     def facts(self) -> TaskFacts:
         return self.expected if self.expected is not None else self.load()
 
     # -- processes --------------------------------------------------------------------------
-    def _spawn(self) -> _Jailed:
-        p = _Jailed(self.source, self.limits, self.guard)
-        self._live.append(p)
+    def _kill_jail(self) -> None:
+        if self._jail is not None:
+            self._jail.close()
+            if self._jail in self._live:
+                self._live.remove(self._jail)
+            self._jail = None
+
+    def _checked(self, load: Callable[[], TaskFacts]) -> None:
+        """Run ``load`` (a first load or a fresh task process) and hold its facts to ``expected``."""
         self.started += 1
-        return p
-
-    def _retire(self, p: _Jailed) -> None:
-        p.close()
-        if p in self._live:
-            self._live.remove(p)
-
-    def _process(self) -> _Jailed:
-        if self._current is None:
-            self._current = self._spare or self._spawn()
-            self._spare = None
-            try:
-                facts = self._current.hello()
-            except (ConfinementError, ConfinedTaskError) as e:
-                if isinstance(e, GuardRefused):
-                    self.refusals.append({"event": e.event, "detail": e.detail})
-                self._retire(self._current)
-                self._current = None
-                raise
-            if self.expected is not None and facts != self.expected:
-                self._retire(self._current)
-                self._current = None
-                raise ConfinementError(
-                    f"the generated task {self.source.module} states other facts than were accepted "
-                    f"(name, tags, docstring or methods): {facts.to_dict()} != {self.expected.to_dict()}"[:600])
-            if self.expected is None:
-                self.expected = facts
-                self._present(facts)
-            if self.use_spare:
-                self._spare = self._spawn()
-        return self._current
-
-    def _ask(self, message: Mapping[str, Any]) -> dict[str, Any]:
-        p = self._process()
         try:
-            return p.call(message)
+            facts = load()
         except GuardRefused as e:
             self.refusals.append({"event": e.event, "detail": e.detail})
-            self._retire(p)
-            self._current = None
             raise
-        except (ConfinementError, ConfinedTaskError):
-            if p.proc.poll() is not None or p.proc.returncode is not None:
-                self._retire(p)
-                self._current = None
+        if self.expected is not None and facts != self.expected:
+            self._kill_jail()
+            raise ConfinementError(
+                f"the generated task {self.source.module} states other facts than were accepted "
+                f"(name, tags, docstring or methods): {facts.to_dict()} != {self.expected.to_dict()}"[:600])
+        if self.expected is None:
+            self.expected = facts
+            self._present(facts)
+
+    def _task_process(self) -> _Jail:
+        """The jail whose task process serves this episode (a jail, or a task process, as needed)."""
+        if self._jail is not None and not self._jail.alive:
+            self._kill_jail()
+        if self._jail is None:
+            self._jail = _Jail(self.source, self.limits, self.guard)
+            self._live.append(self._jail)
+            self.jails += 1
+            self._checked(self._jail.facts)
+        elif not self._jail.child_alive:
+            self._checked(self._jail.fresh)
+        return self._jail
+
+    def _ask(self, message: Mapping[str, Any]) -> dict[str, Any]:
+        j = self._task_process()
+        try:
+            return j.call(message)
+        except GuardRefused as e:
+            self.refusals.append({"event": e.event, "detail": e.detail})
             raise
 
     def new_episode(self) -> None:
-        """Retire the current process: the next call goes to a fresh one."""
+        """The next call goes to a fresh task process (the current one is killed first)."""
         with self._lock:
-            if self._current is not None:
-                self._retire(self._current)
-                self._current = None
+            if self._jail is not None:
+                self._jail.child_alive = False
             self._episode_used = False
 
     def close(self) -> None:
-        """End every process of this task (also done when it is garbage-collected)."""
+        """End the jail of this task (also done when it is garbage-collected)."""
         with self._lock:
-            self._current = self._spare = None
+            self._jail = None
             _close_all(self._live)
 
     # -- the protocol -----------------------------------------------------------------------
@@ -388,4 +403,4 @@ class ConfinedTask:
         return f"ConfinedTask({self.source.module!r}, sha256={self.source.sha256[:12]})"
 
 
-__all__ = ["ConfinedTask", "HOST", "ModuleSource", "TaskFacts"]
+__all__ = ["FORKSERVER", "ConfinedTask", "ModuleSource", "TaskFacts"]

@@ -84,7 +84,7 @@ def run_isolated(source: ModuleSource, *, name: str, seeds: tuple[int, ...], acc
     done = {r.name for r in results}
     results += [CheckResult(c, "skip", "not run") for c in ORDER if c not in done]
     ended = "completed" if violation is None else f"refused by the runtime guard: {violation['detail']}"
-    info = {"jail": "bwrap", "seccomp": True, "guard": guarded, "processes": task.started}
+    info = {"jail": "bwrap", "seccomp": True, "guard": guarded, "processes": task.started, "jails": task.jails}
     facts = task.expected.to_dict() if task.expected is not None else None
     return IsolatedRun(tuple(sorted(results, key=lambda r: ORDER.index(r.name))), ended,
                        time.perf_counter() - t0, violation, info, facts)

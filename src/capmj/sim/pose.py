@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-import mujoco
 import numpy as np
 import numpy.typing as npt
 
@@ -71,6 +70,8 @@ def wxyz(quat: Vector) -> tuple[float, float, float, float]:
 def mat_to_quat(mat: np.ndarray) -> np.ndarray:
     """Unit quaternion of a 3×3 rotation matrix (``mju_mat2Quat``)."""
     quat = np.empty(4)
+    import mujoco  # here, not at import: the task API (and the jailed host) needs no simulator
+
     mujoco.mju_mat2Quat(quat, np.ascontiguousarray(mat, dtype=np.float64).reshape(-1))
     return quat
 
