@@ -35,14 +35,15 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _confinement(name: str) -> CheckResult | None:
-    """For an LLM-written task, the re-run of its static check and sha256 before anything of it is
-    imported (:func:`capmj.confine.manifest.verify`); ``None`` for any other task."""
+    """For an LLM-written task, the re-run of its static check and the sha256 of every file before
+    anything of it runs (:func:`capmj.confine.manifest.verify`); ``None`` for any other task."""
     problems = registry.confinement(name)
     if problems is None:
         return None
     if problems:
         return CheckResult("confinement", "fail", "not imported: " + "; ".join(problems[:5]))
-    return CheckResult("confinement", "pass", "every module unchanged since acceptance and passes the static check")
+    return CheckResult("confinement", "pass", "every file unchanged since acceptance, every module passes the static "
+                                              "check; it runs only in the jail")
 
 
 def main(argv: list[str] | None = None) -> int:
