@@ -215,3 +215,24 @@ def test_a_candidate_past_a_broken_static_check_is_refused_at_runtime_without_re
     assert not rec.accepted and not rec.repaired and calls == 2  # pick examples, write: no repair, no vote
     assert rec.reason.startswith("refused by the runtime guard: import") and rec.stage == "static"
     assert not (tmp_path / "marker").exists() and not (tmp_path / "out" / "pyproject.toml").exists()
+
+
+def test_a_module_the_compiler_cannot_take_is_rejected_with_its_reason_and_the_journal_kept(tmp_path):
+    """A 1 200-term sum makes ``compile`` raise ``RecursionError``: a parse failure, not a crash."""
+    import json
+
+    from capmj.generate import GenerateConfig, generate
+    from generator_script import GeneratorScript, ScriptedCandidate
+    from llm_stub_server import StubLLMServer
+
+    deep = GOOD_TEXT().replace("        k = int(rng.integers(2, 4))",
+                               "        k = int(rng.integers(2, 4)) + " + " + ".join(["0"] * 1200))
+    cand = ScriptedCandidate("deep.py", NAME, "Put every block in the zone of its color.", "static:parse", deep, deep)
+    with StubLLMServer(responder=GeneratorScript([cand])) as server:
+        result = generate(GenerateConfig(mode="top-down", name=NAME, description=cand.goal, model="openai/stub",
+                                         api_base=server.base_url, out=tmp_path / "out", seeds=1, accept_rate=1.0,
+                                         cache_dir=tmp_path / "cache", timeout_s=30))
+    rec = result.records[0]
+    assert not rec.accepted and rec.stage == "static" and "RecursionError" in rec.reason, rec.reason
+    line = json.loads((tmp_path / "out" / "generation.jsonl").read_text())
+    assert line["stage"] == "static" and "RecursionError" in line["reason"]

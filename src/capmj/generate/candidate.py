@@ -258,6 +258,8 @@ def run_candidate(ctx: Context, index: int) -> CandidateRecord:
             _reflect(ctx, conv, rec, attempt)
     except (ValueError, CapmjError) as e:  # LLM failures, unusable answers
         rec.reason = f"{rec.stage}: {type(e).__name__}: {e}"[:800]
+    except Exception as e:  # noqa: BLE001 - a candidate must never end the run (and its journal)
+        rec.reason = f"{rec.stage}: capmj failed on this candidate: {type(e).__name__}: {e}"[:800]
     finally:
         rec.usage = conv.usage
         rec.wall_s = {"checks": round(rec.wall_s.get("checks", 0.0), 3), "total": round(time.perf_counter() - t0, 3)}
