@@ -130,7 +130,8 @@ def test_text_of_a_reused_inner_list_is_refused(line: str) -> None:
 
 
 def test_joining_texts_made_through_an_alias_stops_early() -> None:
-    error = refused(ALIASED + "s = ''.join(map(str, c))\n", BudgetExceeded)  # str(b): 3 MB each, 100 of them
+    error = refused(ALIASED + "s = ''.join(map(str, c))\n", BudgetExceeded,  # str(b): 3 MB each, 100 of them
+                    budget=SandboxBudget(max_elements=10**6))
     assert ".join()" in str(error)
 
 

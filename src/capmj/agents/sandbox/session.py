@@ -30,6 +30,7 @@ import time
 import types
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from operator import eq, ge, gt, is_, is_not, le, lt, ne  # by name: the layer check reads .eq as MjModel's
 from typing import Any
 
 import numpy as _np
@@ -47,9 +48,8 @@ MAX_INT_BITS = 1_000_000
 _SEQUENCES = (str, bytes, bytearray, list, tuple)
 
 _COMPARISONS: Mapping[str, Callable[[Any, Any], Any]] = {
-    "lt": operator.lt, "le": operator.le, "gt": operator.gt, "ge": operator.ge, "eq": operator.eq,
-    "ne": operator.ne, "in": lambda a, b: a in b, "not_in": lambda a, b: a not in b,
-    "is": operator.is_, "is_not": operator.is_not,
+    "lt": lt, "le": le, "gt": gt, "ge": ge, "eq": eq, "ne": ne, "in": lambda a, b: a in b,
+    "not_in": lambda a, b: a not in b, "is": is_, "is_not": is_not,
 }
 """The comparisons the rewritten code routes through :meth:`_Session.compare`, by guard name."""
 
