@@ -161,8 +161,13 @@ def _close_others(keep: set[int]) -> None:
 
 
 def main() -> int:
-    # trusted start-up: everything the task API needs, before any task process exists
-    import numpy  # noqa: F401
+    # trusted start-up: everything the task API needs, before any task process exists (numpy loads
+    # numpy.random on first use: done here once, not in every task process)
+    import numpy
+    import numpy.linalg  # noqa: F401
+    import numpy.random
+
+    numpy.random.Generator(numpy.random.PCG64(0)).random()
 
     import capmj.confine.host  # noqa: F401
     import capmj.confine.seccomp  # noqa: F401
