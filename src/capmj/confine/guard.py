@@ -35,7 +35,7 @@ from typing import Any, Callable, Sequence
 from capmj.confine.allowlist import IMPORTABLE
 
 VIOLATION_EXIT = 86
-"""Exit code of a worker the guard ended (the parent also reads the recorded event)."""
+"""Exit code of a task process the guard ended (the parent also reads the reported event)."""
 
 REFUSED_EVENTS = (
     "os.system", "os.exec", "os.spawn", "os.posix_spawn", "os.fork", "os.forkpty", "subprocess.", "pty.",

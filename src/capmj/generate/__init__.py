@@ -3,7 +3,7 @@ writing, judged by physics, delivered as an installable plugin package.  See doc
 
 Modules: :mod:`config` (the run), :mod:`library` (installed tasks as examples, API reference),
 :mod:`prompts` (``prompts/generator/``), :mod:`conversation` (recorded multi-turn chat),
-:mod:`static` (AST checks), :mod:`isolate` + :mod:`worker` (limited check process),
+:mod:`static` (AST checks), :mod:`isolate` (the checks of a candidate whose code runs in the jail),
 :mod:`candidate` (one candidate's stages), :mod:`package` (the plugin package), :mod:`run`, :mod:`cli`.
 """
 

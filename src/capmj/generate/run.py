@@ -1,7 +1,7 @@
 """A whole generator run: N candidates (in parallel threads), deduplication, the package.
 
-Candidates are independent conversations; the heavy work of each (its checks) runs in its own
-limited worker process, so threads suffice.  Records are ordered by candidate index whatever
+Candidates are independent conversations; each one's code runs in its own jail, and the checks
+(MuJoCo physics, which releases the GIL while it steps) run in the candidate's thread.  Records are ordered by candidate index whatever
 order they finish in, so two runs over the same LLM answers write the same files.
 """
 

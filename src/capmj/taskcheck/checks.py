@@ -3,8 +3,9 @@
 Why it lives here and not in ``capmj.tasks``: two of its checks run real episodes with the
 oracle through :func:`capmj.runner.run_episode`, and the layers only depend downward
 (sim <- tasks <- agents <- runner/bench).  ``python -m capmj.tasks check`` is a thin, lazy entry
-into this module; the task generator runs the very same :func:`check_task` inside its limited
-worker process, so plugin authors and the generator judge tasks by one definition.
+into this module; the task generator runs the very same :func:`check_task` on a jailed
+:class:`~capmj.confine.proxy.ConfinedTask`, so plugin authors and the generator judge tasks by one
+definition.
 
 Checks, in order (a check runs only when every check before it passed; the rest are skipped):
 
@@ -256,8 +257,8 @@ def check_task(task: Task, config: CheckConfig = CheckConfig(), *,
     """Run ``checks`` (default: all, in :data:`CHECKS` order) on ``task``; never raises for the
     task's own faults: an exception inside a check is that check's ``error`` outcome.
 
-    ``on_start``/``on_result`` are told about each check as it begins and ends (the generator's
-    worker streams them out, so a check killed by a resource limit is still named).
+    ``on_start``/``on_result`` are told about each check as it begins and ends (the generator
+    records which check a refused event belongs to).
     """
     unknown = [c for c in checks if c not in _RUNNERS]
     if unknown:

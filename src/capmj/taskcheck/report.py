@@ -1,8 +1,7 @@
 """What the task checker answers: one :class:`CheckResult` per check, gathered in a :class:`Report`.
 
-Results are frozen, JSON-friendly data so the same facts can be printed for a plugin author,
-streamed as JSON lines out of the generator's limited worker process, and stored in
-``generation.jsonl`` without a second representation.
+Results are frozen, JSON-friendly data so the same facts can be printed for a plugin author and
+stored in ``generation.jsonl`` without a second representation.
 """
 
 from __future__ import annotations
