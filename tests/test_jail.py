@@ -251,6 +251,31 @@ def test_the_tmpfs_is_emptied_between_episodes():
         task.close()
 
 
+def test_episodes_in_threads_get_their_own_task_processes_which_outlive_the_threads():
+    """``--concurrency``: episodes run at once in threads; each thread gets its own jail, and a jail
+    started from a thread survives the thread (bwrap dies with the thread that started it, so the
+    jails are started from one long-lived launcher thread)."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    task = ConfinedTask(ModuleSource(MODULE, GOOD))
+    together = threading.Barrier(3)
+
+    def episode(seed: int) -> bool:
+        together.wait(timeout=60)
+        scene = make_scene(task, seed)
+        return task.evaluate(scene, SceneState.from_specs(scene.objects)).success
+
+    try:
+        with ThreadPoolExecutor(3) as pool:
+            assert list(pool.map(episode, range(3))) == [False] * 3
+        assert task.jails == 3 and task.started == 3
+        assert all(j.alive for j in task._live)  # the pool's threads are gone, their jails are not
+    finally:
+        task.close()
+    assert task._live == []
+
+
 def test_limits_and_failures_of_the_jailed_code_are_named():
     slow = GOOD.replace("        k = int(rng.integers(2, 4))", "        while True:\n            pass")
     task = ConfinedTask(ModuleSource(MODULE, slow), jail.Limits(cpu_s=2, wall_s=30))

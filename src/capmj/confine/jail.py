@@ -28,6 +28,7 @@ import resource
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Sequence
@@ -159,8 +160,17 @@ def start(argv: Sequence[str], limits: Limits, stderr: IO[bytes]) -> subprocess.
     words it), so a run pays for no probe."""
     if shutil.which(BWRAP) is None:
         raise ConfinementError(NOT_INSTALLED)
-    return subprocess.Popen(jail_command(argv, limits), stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr,
-                            preexec_fn=_rlimits(limits), close_fds=True, env={})
+    cmd = jail_command(argv, limits)
+    return _launcher().submit(subprocess.Popen, cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr,
+                              preexec_fn=_rlimits(limits), close_fds=True, env={}).result()
+
+
+@functools.cache
+def _launcher() -> ThreadPoolExecutor:
+    """The one thread that starts every jail.  ``--die-with-parent`` follows the *thread* that
+    started bwrap (``PR_SET_PDEATHSIG``), so a jail started from an episode thread would die when
+    a thread pool retires that thread; this thread lives as long as the process."""
+    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="capmj-jail-launcher")
 
 
 __all__ = ["CLEAN_ENV", "Limits", "NOBODY", "NOT_INSTALLED", "TMP", "jail_command", "problem", "refused", "require", "start"]

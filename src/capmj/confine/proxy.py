@@ -237,6 +237,14 @@ class _Jail:
                 pass
 
 
+class _PerThread(threading.local):
+    """One jail per thread that uses the task: episodes that run at once in threads
+    (``--concurrency``) each get their own task processes, and a fresh one per episode."""
+
+    jail: _Jail | None = None
+    episode_used = False
+
+
 def _close_all(jails: list[_Jail]) -> None:
     for j in jails:
         j.close()
@@ -263,8 +271,7 @@ class ConfinedTask:
         """A goal text recorded at acceptance (for listings that must not start a process)."""
         self.guard = guard
         self._lock = threading.RLock()
-        self._jail: _Jail | None = None
-        self._episode_used = False
+        self._local = _PerThread()
         self._live: list[_Jail] = []
         self.started = 0
         """How many task processes this task has started (one per episode, and after a failure)."""
@@ -315,89 +322,94 @@ class ConfinedTask:
 
     # -- processes --------------------------------------------------------------------------
     def _kill_jail(self) -> None:
-        if self._jail is not None:
-            self._jail.close()
-            if self._jail in self._live:
-                self._live.remove(self._jail)
-            self._jail = None
+        j = self._local.jail
+        if j is not None:
+            j.close()
+            with self._lock:
+                if j in self._live:
+                    self._live.remove(j)
+            self._local.jail = None
 
     def _checked(self, load: Callable[[], TaskFacts]) -> None:
         """Run ``load`` (a first load or a fresh task process) and hold its facts to ``expected``."""
-        self.started += 1
+        with self._lock:
+            self.started += 1
         try:
             facts = load()
         except GuardRefused as e:
-            self.refusals.append({"event": e.event, "detail": e.detail})
+            with self._lock:
+                self.refusals.append({"event": e.event, "detail": e.detail})
             raise
-        if self.expected is not None and facts != self.expected:
+        with self._lock:
+            if self.expected is None:
+                self.expected = facts
+                self._present(facts)
+            same = facts == self.expected
+        if not same:
             self._kill_jail()
             raise ConfinementError(
                 f"the generated task {self.source.module} states other facts than were accepted "
                 f"(name, tags, docstring or methods): {facts.to_dict()} != {self.expected.to_dict()}"[:600])
-        if self.expected is None:
-            self.expected = facts
-            self._present(facts)
 
     def _task_process(self) -> _Jail:
         """The jail whose task process serves this episode (a jail, or a task process, as needed)."""
-        if self._jail is not None and not self._jail.alive:
+        local = self._local
+        if local.jail is not None and not local.jail.alive:
             self._kill_jail()
-        if self._jail is None:
-            self._jail = _Jail(self.source, self.limits, self.guard)
-            self._live.append(self._jail)
-            self.jails += 1
-            self._checked(self._jail.facts)
-        elif not self._jail.child_alive:
-            self._checked(self._jail.fresh)
-        return self._jail
+        if local.jail is None:
+            local.jail = _Jail(self.source, self.limits, self.guard)
+            with self._lock:
+                self._live.append(local.jail)
+                self.jails += 1
+            self._checked(local.jail.facts)
+        elif not local.jail.child_alive:
+            self._checked(local.jail.fresh)
+        return local.jail
 
     def _ask(self, message: Mapping[str, Any]) -> dict[str, Any]:
         j = self._task_process()
         try:
             return j.call(message)
         except GuardRefused as e:
-            self.refusals.append({"event": e.event, "detail": e.detail})
+            with self._lock:
+                self.refusals.append({"event": e.event, "detail": e.detail})
             raise
 
     def new_episode(self) -> None:
         """The next call goes to a fresh task process (the current one is killed first)."""
-        with self._lock:
-            if self._jail is not None:
-                self._jail.child_alive = False
-            self._episode_used = False
+        if self._local.jail is not None:
+            self._local.jail.child_alive = False
+        self._local.episode_used = False
 
     def close(self) -> None:
         """End the jail of this task (also done when it is garbage-collected)."""
         with self._lock:
-            self._jail = None
             _close_all(self._live)
+        self._local = _PerThread()
 
     # -- the protocol -----------------------------------------------------------------------
     def _sample(self, rng: np.random.Generator) -> Scene:
         from capmj.tasks.protocol import Resample
 
-        with self._lock:
-            if self._episode_used:
-                self.new_episode()
-            answer = self._ask({"op": "sample_scene", "rng": wire.rng_to_wire(rng)})
-            rng.bit_generator.state = wire.rng_from_wire(answer.get("rng"))
-            if answer.get("resample") is True:
-                raise Resample
-            return wire.scene_from_wire(answer.get("scene"))
+        if self._local.episode_used:
+            self.new_episode()
+        answer = self._ask({"op": "sample_scene", "rng": wire.rng_to_wire(rng)})
+        rng.bit_generator.state = wire.rng_from_wire(answer.get("rng"))
+        if answer.get("resample") is True:
+            raise Resample
+        return wire.scene_from_wire(answer.get("scene"))
 
     def _sample_legacy(self, rng: np.random.Generator) -> Scene:  # pragma: no cover - never called: refused first
         raise ConfinementError("a task defining two different scene methods is refused before it runs")
 
     def _oracle_goals(self, scene: Scene) -> list[OracleGoal]:
-        with self._lock:
-            self._episode_used = True
-            return wire.goals_from_wire(self._ask({"op": "oracle_goals", "scene": wire.scene_to_wire(scene)}).get("goals"))
+        self._local.episode_used = True
+        return wire.goals_from_wire(self._ask({"op": "oracle_goals", "scene": wire.scene_to_wire(scene)}).get("goals"))
 
     def _evaluate(self, scene: Scene, state: SceneState) -> Verdict:
-        with self._lock:
-            self._episode_used = True
-            answer = self._ask({"op": "evaluate", "scene": wire.scene_to_wire(scene), "state": wire.state_to_wire(state)})
-            return wire.verdict_from_wire(answer.get("verdict"))
+        self._local.episode_used = True
+        answer = self._ask({"op": "evaluate", "scene": wire.scene_to_wire(scene), "state": wire.state_to_wire(state)})
+        return wire.verdict_from_wire(answer.get("verdict"))
 
     def __repr__(self) -> str:
         return f"ConfinedTask({self.source.module!r}, sha256={self.source.sha256[:12]})"
