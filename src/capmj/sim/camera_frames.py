@@ -77,11 +77,6 @@ class Heightmap:
         return (int(np.floor((y - self.bounds[1, 0]) / self.pixel_size + 1e-9)),
                 int(np.floor((x - self.bounds[0, 0]) / self.pixel_size + 1e-9)))
 
-    def xy_of(self, row: int, col: int) -> tuple[float, float]:
-        """World (x, y) of the centre of cell (row, col)."""
-        return (float(self.bounds[0, 0] + (col + 0.5) * self.pixel_size),
-                float(self.bounds[1, 0] + (row + 0.5) * self.pixel_size))
-
 
 @dataclass(frozen=True, eq=False)
 class Observation:

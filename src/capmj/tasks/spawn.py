@@ -97,13 +97,6 @@ class Spawner:
     def next_id(self) -> int:
         return max((o.obj_id for o in self._objects), default=0) + 1
 
-    def is_free(self, xy: Sequence[float], radius: float) -> bool:
-        """Whether a footprint circle of ``radius`` at ``xy`` keeps ``gap`` from every object."""
-        if not self._cx:
-            return True
-        d = np.hypot(np.asarray(self._cx) - xy[0], np.asarray(self._cy) - xy[1])
-        return bool(np.all(d >= np.asarray(self._cr) + radius + self.gap))
-
     def sample_xy(
         self,
         radius: float,
