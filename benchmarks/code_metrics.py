@@ -11,6 +11,16 @@ Reads the files as text (AST), imports nothing of capmj, runs nothing of it:
   ``import_cycles_counting_function_imports`` is the same over every import, where a function-level
   import hides a cycle of modules that need each other;
 - ``function_imports``: imports inside function bodies (often a cycle being dodged), counted and listed;
+- ``import_cycles_with_package_inits``: the same as ``import_cycles`` with the package
+  ``__init__`` modules an import runs on its way (``from capmj.agents.api.values import x`` runs
+  ``capmj/agents/api/__init__.py`` first): an edge to each package above the target that is not
+  also above the importer, so two packages whose ``__init__`` re-export each other's modules form a
+  cycle here even when no two modules do;
+- ``modules_over_300``: the modules over 300 lines;
+- ``agents``: the shape of ``capmj.agents``: its top-level modules, each sub-package (wing) with its
+  modules and lines, and the reporters (``agents/report/``; before that package existed, the flat
+  modules of the same concept: ``reporter*``, ``relation_*``, ``scene_*``, ``verdict``,
+  ``confidence``, ``check_reads``, ``plan_check``) with their modules, lines and ``ast.parse`` calls;
 - ``duplicates``: the pairs the ``duplicates`` tool lists over the whole checkout whose two sides
   are both in ``src/`` or ``task_plugins/`` (null when the tool is not installed).
 
@@ -28,6 +38,12 @@ import subprocess
 from pathlib import Path
 
 MAX_MODULE_LINES = 400
+LONG_MODULE_LINES = 300
+AGENTS = "capmj.agents"
+REPORT = "capmj.agents.report"
+FLAT_REPORT_PREFIXES = ("reporter", "relation_", "scene_")
+FLAT_REPORT_NAMES = ("verdict", "confidence", "check_reads", "plan_check")
+"""The reporter modules of ``capmj.agents`` while they were flat (before ``agents/report/``)."""
 MAX_FUNCTION_LINES = 80
 SOURCE_DIRS = ("src", "task_plugins")
 _DUP_ROW = re.compile(r"^D\d+ (\S+?):(\d+-\d+) ~ (\S+?):(\d+-\d+)(.*)$")
@@ -133,6 +149,66 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return sorted(comps)
 
 
+def _with_package_inits(graph: dict[str, set[str]], mods: dict[str, Path]) -> dict[str, set[str]]:
+    """``graph`` plus, for each edge, the packages above its target that are not above its source."""
+    out: dict[str, set[str]] = {}
+    for src, targets in graph.items():
+        above_src = {".".join(src.split(".")[:i]) for i in range(1, src.count(".") + 1)}
+        edges = set(targets)
+        for t in targets:
+            for i in range(1, t.count(".") + 1):
+                pkg = ".".join(t.split(".")[:i])
+                if pkg in mods and pkg not in above_src and pkg != src:
+                    edges.add(pkg)
+        out[src] = edges
+    return out
+
+
+def _ast_parse_calls(tree: ast.Module) -> int:
+    """Calls of ``ast.parse`` (or of ``parse`` imported from ``ast``)."""
+    from_ast = {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module == "ast"
+                for a in n.names if a.name == "parse"}
+    count = 0
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call):
+            continue
+        f = node.func
+        if (isinstance(f, ast.Attribute) and f.attr == "parse" and isinstance(f.value, ast.Name) and f.value.id == "ast") \
+                or (isinstance(f, ast.Name) and f.id in from_ast):
+            count += 1
+    return count
+
+
+def _agents(mods: dict[str, Path], lines: dict[str, int], root: Path) -> dict:
+    """Top-level modules, wings and the reporters of ``capmj.agents``."""
+    inside = {name: path for name, path in mods.items() if name.startswith(AGENTS + ".")}
+    top = sorted(name.split(".")[2] for name in inside if name.count(".") == 2 and inside[name].name != "__init__.py")
+    wings: dict[str, dict] = {}
+    for name, path in sorted(inside.items()):
+        wing = name.split(".")[2]
+        if path.name == "__init__.py" and name.count(".") == 2 or name.count(".") > 2:
+            w = wings.setdefault(wing, {"modules": 0, "lines": 0})
+            w["modules"] += 1
+            w["lines"] += lines[str(path.relative_to(root))]
+    report = {n: p for n, p in inside.items() if n == REPORT or n.startswith(REPORT + ".")}
+    if not report:
+        report = {n: p for n, p in inside.items() if n.count(".") == 2 and (
+            n.split(".")[2].startswith(FLAT_REPORT_PREFIXES) or n.split(".")[2] in FLAT_REPORT_NAMES)}
+    report_lines = {str(p.relative_to(root)): lines[str(p.relative_to(root))] for p in report.values()}
+    return {
+        "modules": len(inside),
+        "lines": sum(lines[str(p.relative_to(root))] for p in inside.values()),
+        "top_level_modules": {"count": len(top), "list": top},
+        "wings": wings,
+        "report": {
+            "modules": len(report),
+            "lines": sum(report_lines.values()),
+            "ast_parse_calls": sum(_ast_parse_calls(ast.parse(p.read_text(encoding="utf-8"))) for p in report.values()),
+            "lines_per_module": dict(sorted(report_lines.items())),
+        },
+    }
+
+
 def _duplicates(root: Path) -> dict | None:
     tool = shutil.which("duplicates")
     if tool is None:
@@ -179,6 +255,7 @@ def measure(root: Path) -> dict:
                     # ast.walk meets outer functions first: the innermost one names the place
                     function_imports[(rel, node.lineno)] = f"{fn.name}: {'.' * getattr(node, 'level', 0)}{what}"
     cycles, cycles_all = _cycles(graph), _cycles(graph_all)
+    cycles_inits = _cycles(_with_package_inits(graph, mods))
     return {
         "modules": len(lines),
         "total_lines": sum(lines.values()),
@@ -187,6 +264,9 @@ def measure(root: Path) -> dict:
         "functions_over_80": sorted(long_functions, key=lambda f: -f["lines"]),
         "import_cycles": {"count": len(cycles), "components": cycles},
         "import_cycles_counting_function_imports": {"count": len(cycles_all), "components": cycles_all},
+        "import_cycles_with_package_inits": {"count": len(cycles_inits), "components": cycles_inits},
+        "modules_over_300": {k: v for k, v in sorted(lines.items()) if v > LONG_MODULE_LINES},
+        "agents": _agents(mods, lines, root),
         "function_level_imports": {"count": len(function_imports),
                                    "list": [f"{f}:{n} {w}" for (f, n), w in sorted(function_imports.items())]},
         "duplicates": _duplicates(root),
