@@ -7,35 +7,15 @@ Shared by :mod:`capmj.agents.api` (capmj's functions) and :mod:`capmj.agents.cap
 
 from __future__ import annotations
 
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
-from capmj.errors import PortingDifference
+from capmj.agents.sandbox.ravens_utils import ONE_ELEMENT_LISTS, Coordinate
+from capmj.agents.sandbox.sizes import preview
 from capmj.sim.bounds import WORKSPACE
 
-ONE_ELEMENT_LISTS = ("get_obj_pos / get_obj_rot return one position [x, y, z] / one quaternion, not CapRavens' "
-                     "one-element list of them: drop the [0] (here get_obj_pos(obj)[0] is already x)")
-"""The message of indexing a :class:`Coordinate`."""
-
-
-class Coordinate(float):
-    """One number of a position or quaternion the API returned: a float in every way, except that
-    indexing or unpacking it raises :class:`~capmj.errors.PortingDifference`.
-
-    CapRavens' ``get_obj_pos`` returned a one-element list of positions, so its code writes
-    ``get_obj_pos(obj)[0][2]`` or ``pos = get_obj_pos(obj)[0]; pos[1]``; here ``[0]`` is already
-    x, and a plain float would fail with "'float' object is not subscriptable", which does not
-    say why.  Arithmetic gives plain floats, numpy makes float64 arrays of it, ``repr`` is a float's.
-    """
-
-    __slots__ = ()
-
-    def __getitem__(self, index: Any) -> NoReturn:
-        raise PortingDifference(ONE_ELEMENT_LISTS)
-
-    def __iter__(self) -> NoReturn:
-        raise PortingDifference(ONE_ELEMENT_LISTS)
+__all__ = ["ONE_ELEMENT_LISTS", "Coordinate", "denormalize_uv", "is_number", "is_pose", "is_vector", "summary"]
 
 
 def denormalize_uv(u: float, v: float) -> tuple[float, float]:
@@ -72,7 +52,5 @@ def summary(value: Any, limit: int = 160) -> str:
         shown = value[: limit // 3 + 1]  # a float takes at least 3 characters: enough to fill the limit
         text = "[" + ", ".join(f"{v:.4f}" for v in shown) + ("]" if len(shown) == len(value) else ", ...")
     else:
-        from capmj.agents.sandbox.sizes import preview  # the sandbox package imports this module
-
         text = preview(value, limit)
     return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -2,7 +2,7 @@
 
 :func:`check_code` parses plan code and rejects, with the offending line, every construct that
 could reach the interpreter (imports, classes, dunder names, ``_private`` attributes, known
-dangerous names and attributes); :class:`_Rewriter` then routes the operations that can grow
+dangerous names and attributes); :class:`Rewriter` then routes the operations that can grow
 without bound (``*``, ``**``, ``<<``, ``+``, growing methods, ``while`` loops, ``except``
 handlers) through ``__cap_*`` guards provided at run time, and makes set displays
 insertion-ordered sets.  Both live together because the
@@ -203,7 +203,7 @@ def _helper_statement(name: str, like: ast.AST) -> ast.Expr:
     return ast.copy_location(ast.Expr(_helper_call(name, [], like)), like)
 
 
-class _Rewriter(ast.NodeTransformer):
+class Rewriter(ast.NodeTransformer):
     """Routes resource-hungry operations of checked code through the session's guards."""
 
     def visit_BinOp(self, node: ast.BinOp) -> ast.AST:

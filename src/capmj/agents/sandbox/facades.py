@@ -8,7 +8,7 @@ a fresh curated dict per run so tampering cannot leak between runs.  ``np.random
 the generator the caller passes (the episode's), never from numpy's global state, so the same
 code gives the same numbers in every process; ``set``/``frozenset`` are insertion-ordered
 (:mod:`capmj.agents.sandbox.ordered`) and ``type(x)`` answers with one argument only.  The builders take the run's
-session (:class:`~capmj.agents.sandbox.session._Session`) as a parameter, so this module does
+session (:class:`~capmj.agents.sandbox.session.Session`) as a parameter, so this module does
 not import the runtime and there is no import cycle.
 """
 
@@ -32,7 +32,7 @@ from capmj.agents.sandbox.sizes import array_elements, broadcast_elements, cappe
 from capmj.errors import TextBudgetExceeded
 
 if TYPE_CHECKING:
-    from capmj.agents.sandbox.session import _Session
+    from capmj.agents.sandbox.session import Session
 
 _SAFE_BUILTINS = (
     "abs", "all", "any", "bool", "chr", "dict", "divmod", "enumerate", "filter", "float",
@@ -45,7 +45,7 @@ _SAFE_BUILTINS = (
 
 # Copy only name and doc onto wrappers: ``functools.wraps`` would also copy a wrapped type's
 # ``__dict__`` (descriptors such as ``chain.from_iterable``) into the wrapper function.
-_wraps = functools.partial(functools.wraps, assigned=("__name__", "__qualname__", "__doc__"),
+wraps = functools.partial(functools.wraps, assigned=("__name__", "__qualname__", "__doc__"),
                            updated=())
 
 
@@ -151,14 +151,14 @@ def _like_len(a: Any, *args: Any, shape: Any = None, **kwargs: Any) -> int:
 _BinaryOp = Callable[[Any, Any], Any]
 
 
-def _checked_op(check: _BinaryOp, op: _BinaryOp) -> _BinaryOp:
+def checked_op(check: _BinaryOp, op: _BinaryOp) -> _BinaryOp:
     def apply(a: Any, b: Any) -> Any:
         return op(a, check(a, b))
 
     return apply
 
 
-def _growth(obj: Any, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> int:
+def growth(obj: Any, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> int:
     """Elements ``obj.name(*args, **kwargs)`` would produce (arrays and strings only)."""
     if isinstance(obj, _np.ndarray):
         if name == "repeat":
@@ -268,12 +268,12 @@ _ITERTOOLS = (
 )
 
 
-def _guarded(session: _Session, fn: Callable[..., Any], size: Callable[..., int] | None,
+def _guarded(session: Session, fn: Callable[..., Any], size: Callable[..., int] | None,
              label: str, *, whole_first: bool = False) -> Callable[..., Any]:
     """``fn`` that first counts the arrays numpy makes of its nested-list arguments (but the first
     with ``whole_first``: ``size`` counts it) and the result ``size(*args, **kwargs)`` says it
     makes (None: no result larger than its arguments)."""
-    @_wraps(fn)
+    @wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         session.check_inputs((*args[1 if whole_first else 0:], *kwargs.values()), label)
         try:
@@ -304,7 +304,7 @@ def _size_kw(size: Any = None, **_: Any) -> int:
     return 1 if size is None else _n_elements(size)
 
 
-def _random_facade(session: _Session, rng: _np.random.Generator) -> _Facade:
+def _random_facade(session: Session, rng: _np.random.Generator) -> _Facade:
     """``np.random`` over ``rng``: the legacy names LLM code writes, mapped onto the Generator.
 
     ``seed`` is accepted and ignored and ``default_rng`` returns this facade: draws always come
@@ -345,10 +345,10 @@ def _random_facade(session: _Session, rng: _np.random.Generator) -> _Facade:
     return this[0]
 
 
-def _int_capped(session: _Session, fn: Callable[..., Any], cap: int,
+def _int_capped(session: Session, fn: Callable[..., Any], cap: int,
                 label: str) -> Callable[..., Any]:
     """``fn`` refusing integer arguments above ``cap`` (its C loop could run for hours)."""
-    @_wraps(fn)
+    @wraps(fn)
     def wrapper(*args: Any) -> Any:
         if any(isinstance(a, int) and a > cap for a in args):
             session.abort(f"{label} arguments are limited to {cap}")
@@ -366,7 +366,7 @@ def _numpy_text_ready() -> None:
     repr(_np.zeros(1))
 
 
-def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
+def _facades(session: Session, rng: _np.random.Generator) -> dict[str, object]:
     """Fresh facades for one run (they close over the run's budget and random generator)."""
     _numpy_text_ready()
     import shapely.affinity
@@ -404,7 +404,7 @@ def _facades(session: _Session, rng: _np.random.Generator) -> dict[str, object]:
     def iterator(name: str) -> Callable[..., Iterator[Any]]:
         real = getattr(_itertools, name)
 
-        @_wraps(real)
+        @wraps(real)
         def make(*args: Any, **kwargs: Any) -> Iterator[Any]:
             return session.bounded(real(*args, **kwargs), f"itertools.{name}()")
 
@@ -438,7 +438,7 @@ PROVIDED_NAMES: frozenset[str] = frozenset(
 shortcuts, curated builtins): code using only these and ``env`` needs nothing synthesised."""
 
 
-def _builtins(session: _Session, output: list[str] | None) -> dict[str, object]:
+def _builtins(session: Session, output: list[str] | None) -> dict[str, object]:
     """A fresh curated builtins dict: tampering in one run cannot reach the next."""
     table: dict[str, object] = {n: getattr(_builtins_module, n) for n in _SAFE_BUILTINS}
     printed = [0]
@@ -490,3 +490,17 @@ def _safe_type(table: Mapping[str, object]) -> Callable[[object], object]:
 
     type_.__name__ = type_.__qualname__ = "type"
     return type_
+
+
+def run_namespace(session: Session, output: list[str] | None, rng: _np.random.Generator) -> dict[str, object]:
+    """The globals a run starts with: fresh curated builtins (``print`` appends to ``output``), the
+    run's module name and fresh facades over ``rng``."""
+    namespace: dict[str, object] = {"__builtins__": _builtins(session, output), "__name__": "__llm_plan__"}
+    namespace.update(_facades(session, rng))
+    return namespace
+
+
+def is_api_function(value: object) -> bool:
+    """Whether a value of the caller's ``env`` is a function whose calls count as API calls: callable,
+    and not a type, a facade or a type check (which only stand for a module or a class)."""
+    return callable(value) and not isinstance(value, (type, _Facade, _TypeCheck))

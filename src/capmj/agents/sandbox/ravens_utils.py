@@ -5,18 +5,45 @@ Quaternions are (x, y, z, w) and Euler angles (roll, pitch, yaw) about the fixed
 PyBullet's conventions (``getEulerFromQuaternion`` / ``getQuaternionFromEuler``), which the
 planner API uses too (``get_obj_rot``, ``get_obj_pos_dict``).  Pure functions of their
 arguments; :func:`utils_members` is what the sandbox's ``utils`` facade holds.
+
+:class:`Coordinate`, the number type of the positions and quaternions the planner API returns, is
+defined here because these helpers refuse it where CapRavens' code passed one number for a list;
+the sandbox sits below the planner API (the API counts text with :mod:`~capmj.agents.sandbox.sizes`),
+and :mod:`capmj.agents.api.values` re-exports it with the API's other values.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
-from capmj.agents.api_values import ONE_ELEMENT_LISTS, Coordinate
 from capmj.errors import PortingDifference
 from capmj.sim.pose import quat_euler_xyz, quat_to_mat, wxyz
+
+ONE_ELEMENT_LISTS = ("get_obj_pos / get_obj_rot return one position [x, y, z] / one quaternion, not CapRavens' "
+                     "one-element list of them: drop the [0] (here get_obj_pos(obj)[0] is already x)")
+"""The message of indexing a :class:`Coordinate`."""
+
+
+class Coordinate(float):
+    """One number of a position or quaternion the API returned: a float in every way, except that
+    indexing or unpacking it raises :class:`~capmj.errors.PortingDifference`.
+
+    CapRavens' ``get_obj_pos`` returned a one-element list of positions, so its code writes
+    ``get_obj_pos(obj)[0][2]`` or ``pos = get_obj_pos(obj)[0]; pos[1]``; here ``[0]`` is already
+    x, and a plain float would fail with "'float' object is not subscriptable", which does not
+    say why.  Arithmetic gives plain floats, numpy makes float64 arrays of it, ``repr`` is a float's.
+    """
+
+    __slots__ = ()
+
+    def __getitem__(self, index: Any) -> NoReturn:
+        raise PortingDifference(ONE_ELEMENT_LISTS)
+
+    def __iter__(self) -> NoReturn:
+        raise PortingDifference(ONE_ELEMENT_LISTS)
 
 
 def _floats(value: Any, n: int, what: str) -> list[float]:

@@ -19,16 +19,16 @@ from typing import Any
 
 import numpy as _np
 
-from capmj.agents.sandbox.checks import _Rewriter, check_code
-from capmj.agents.sandbox.facades import _builtins, _Facade, _facades, _TypeCheck, _wraps
+from capmj.agents.sandbox.checks import Rewriter, check_code
+from capmj.agents.sandbox.facades import is_api_function, run_namespace, wraps
 from capmj.agents.sandbox.located import describe, line_of, located_error
-from capmj.agents.sandbox.session import _Abort, _Session, SandboxBudget
+from capmj.agents.sandbox.session import Abort, SandboxBudget, Session
 from capmj.errors import BudgetExceeded, PlanError, PlanSyntaxError, SandboxViolation
 
 DEFAULT_BUDGET = SandboxBudget()
 """The budget of a run that names none (frozen, so one instance serves every call)."""
 
-def _execute(session: _Session, thunk: Callable[[], Any]) -> Any:
+def _execute(session: Session, thunk: Callable[[], Any]) -> Any:
     """Run ``thunk`` under the session's tracer and budgets, translating every failure."""
     if session.active:  # re-entered from sandboxed code: already traced and budgeted
         return thunk()
@@ -38,7 +38,7 @@ def _execute(session: _Session, thunk: Callable[[], Any]) -> Any:
     sys.settrace(session.global_trace)
     try:
         return thunk()
-    except _Abort as exc:  # a budget or a refusal: the class recorded is that of exc.error
+    except Abort as exc:  # a budget or a refusal: the class recorded is that of exc.error
         line = line_of(exc.__traceback__, session.filename)
         raise located_error(type(exc.error), exc.text, line=line, code=session.code,
                             program=session.program) from exc.error
@@ -52,9 +52,9 @@ def _execute(session: _Session, thunk: Callable[[], Any]) -> Any:
         session.active = False
 
 
-def _sandboxed_function(session: _Session, fn: types.FunctionType) -> Callable[..., Any]:
+def _sandboxed_function(session: Session, fn: types.FunctionType) -> Callable[..., Any]:
     """A function defined by the code, callable later under the same budget and error rules."""
-    @_wraps(fn)
+    @wraps(fn)
     def call(*args: Any, **kwargs: Any) -> Any:
         return _execute(session, lambda: fn(*args, **kwargs))
 
@@ -89,19 +89,16 @@ def run_code(code: str, env: Mapping[str, object], *, budget: SandboxBudget = DE
         message = str(exc)[len(f"line {exc.line}: "):] if exc.line is not None else str(exc)
         raise located_error(type(exc), message, line=exc.line, code=code, program=program) from None
     try:
-        compiled = compile(ast.fix_missing_locations(_Rewriter().visit(tree)), filename, "exec")
+        compiled = compile(ast.fix_missing_locations(Rewriter().visit(tree)), filename, "exec")
     except SyntaxError as exc:  # e.g. 'return' outside function, found only by the compiler
         raise located_error(PlanSyntaxError, f"SyntaxError: {exc.msg}", line=exc.lineno, code=code,
                             program=program) from None
     except (RecursionError, MemoryError):
         raise SandboxViolation("SandboxViolation: code is nested too deeply", code=code) from None
-    session = _Session(budget, filename, code, program)
-    namespace: dict[str, object] = {"__builtins__": _builtins(session, output),
-                                    "__name__": "__llm_plan__"}
-    namespace.update(_facades(session, rng if rng is not None else _np.random.default_rng(0)))
+    session = Session(budget, filename, code, program)
+    namespace = run_namespace(session, output, rng if rng is not None else _np.random.default_rng(0))
     for name, value in env.items():
-        is_api = callable(value) and not isinstance(value, (type, _Facade, _TypeCheck))
-        namespace[name] = session.count_calls(value, name) if is_api else value  # type: ignore[arg-type]
+        namespace[name] = session.count_calls(value, name) if is_api_function(value) else value  # type: ignore[arg-type]
     namespace.update(session.helpers())
     injected = dict(namespace)
     _execute(session, lambda: exec(compiled, namespace))  # noqa: S102 - this is the sandbox

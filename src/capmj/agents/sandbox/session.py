@@ -1,10 +1,10 @@
 """Layer 4 of the sandbox: the budgets of one run, the tracer that counts its lines, and the
 guards the rewritten code calls.
 
-A :class:`_Session` holds the mutable state of one run (executed lines, allocated elements,
+A :class:`Session` holds the mutable state of one run (executed lines, allocated elements,
 API calls, wall-time deadline) and provides the ``__cap_*`` guards the rewritten code calls; a
 ``sys.settrace`` tracer restricted to sandbox frames counts lines, and violations raise
-:class:`_Abort`, a ``BaseException`` that plan code's ``except Exception`` cannot swallow.
+:class:`Abort`, a ``BaseException`` that plan code's ``except Exception`` cannot swallow.
 
 Budgets are deterministic first: executed lines (every ``while`` iteration counts too, so
 ``while True: pass`` stops after the same count on any machine), elements allocated through
@@ -36,7 +36,7 @@ from typing import Any
 import numpy as _np
 
 from capmj.agents.sandbox.checks import FORMAT_FIELD_RULE, THUNK_ARG, format_fields, reaching_field
-from capmj.agents.sandbox.facades import _checked_op, _growth, _wraps
+from capmj.agents.sandbox.facades import checked_op, growth, wraps
 from capmj.agents.sandbox.located import describe
 from capmj.agents.sandbox.ordered import OrderedSet
 from capmj.agents.sandbox.sizes import array_elements, broadcast_elements, matmul_elements, text_length
@@ -51,7 +51,7 @@ _COMPARISONS: Mapping[str, Callable[[Any, Any], Any]] = {
     "lt": lt, "le": le, "gt": gt, "ge": ge, "eq": eq, "ne": ne, "in": lambda a, b: a in b,
     "not_in": lambda a, b: a not in b, "is": is_, "is_not": is_not,
 }
-"""The comparisons the rewritten code routes through :meth:`_Session.compare`, by guard name."""
+"""The comparisons the rewritten code routes through :meth:`Session.compare`, by guard name."""
 
 _ARITHMETIC: Mapping[str, tuple[Callable[[Any, Any], Any], str]] = {
     "add": (operator.add, "+"), "sub": (operator.sub, "-"), "mul": (operator.mul, "*"),
@@ -101,7 +101,7 @@ class SandboxBudget:
                 raise ConfigError(f"SandboxBudget.{name} must be positive or None, not {value}")
 
 
-class _Abort(BaseException):
+class Abort(BaseException):
     """The end of a run: a budget violation or a refused operation; a BaseException so sandboxed
     ``except Exception`` cannot catch it.  ``error`` is what the run fails with (its class is
     the one recorded), ``text`` how the failure reads ("ErrorClass: message")."""
@@ -116,7 +116,7 @@ class _Abort(BaseException):
 # ------------------------------------------------------------------------------------------------
 # 4. one run: budgets, guards, tracer
 # ------------------------------------------------------------------------------------------------
-class _Session:
+class Session:
     """Mutable state of one ``run_code`` call (and of later calls of the functions it defined)."""
 
     def __init__(self, budget: SandboxBudget, filename: str, code: str,
@@ -136,23 +136,23 @@ class _Session:
         if not self.aborted:
             detail = f"{message} (after {self.lines} executed lines, {self.api_calls} API calls)"
             self.aborted = (f"{kind.__name__}: {detail}", kind(detail))
-        raise _Abort(*self.aborted)
+        raise Abort(*self.aborted)
 
     def refuse(self, message: str) -> None:
         """End the run as refused code (:class:`SandboxViolation`), as the static check would."""
         if not self.aborted:
             self.aborted = (f"SandboxViolation: {message}", SandboxViolation(message))
-        raise _Abort(*self.aborted)
+        raise Abort(*self.aborted)
 
     def end_with(self, error: BaseException) -> None:
         """End the run with ``error``, a budget an API function reported (see the module docstring)."""
         if not self.aborted:
             self.aborted = (describe(error), error if isinstance(error, PlanError) else BudgetExceeded(str(error)))
-        raise _Abort(*self.aborted)
+        raise Abort(*self.aborted)
 
     def check_time(self) -> None:
         if self.aborted:
-            raise _Abort(*self.aborted)
+            raise Abort(*self.aborted)
         if time.monotonic() > self.deadline:
             self.abort(f"wall time budget of {self.budget.wall_s:g} s exceeded (a backstop; "
                        "time inside API functions is not counted)")
@@ -183,7 +183,7 @@ class _Session:
             return None  # library frames run untraced (fast); their callers are traced
         self.check_time()
         if frame.f_code.co_varnames[:1] == (THUNK_ARG,):
-            return None  # an operand the rewrite wrapped (see checks._Rewriter): not a line of the code
+            return None  # an operand the rewrite wrapped (see checks.Rewriter): not a line of the code
         return self.local_trace
 
     def local_trace(self, frame: types.FrameType, event: str, arg: object) -> Any:
@@ -337,7 +337,7 @@ class _Session:
         """``template.format`` / ``.format_map`` (or ``str.format`` itself, ``template`` None):
         fields that reach attributes or items are refused as dunders are, and the text of the
         arguments the fields use is counted before the result is made."""
-        @_wraps(method)
+        @wraps(method)
         def call(*args: Any, **kwargs: Any) -> Any:
             text, rest = (template, args) if template is not None else (args[0] if args else None, args[1:])
             if isinstance(text, str):
@@ -360,7 +360,7 @@ class _Session:
         for name, (op, symbol) in _ARITHMETIC.items():
             check = getattr(self, f"check_{name}", None) or self._elementwise(symbol)
             out[f"__cap_{name}_check"] = check  # for ``x op= y``: returns y after checking
-            out[f"__cap_{name}"] = _checked_op(check, op)
+            out[f"__cap_{name}"] = checked_op(check, op)
         for name in _COMPARISONS:
             out[f"__cap_cmp_{name}"] = self.compare(name)
         return out
@@ -374,7 +374,7 @@ class _Session:
         if not isinstance(obj, (_np.ndarray, str, bytes, bytearray)) or not callable(value):
             return value
 
-        @_wraps(value)
+        @wraps(value)
         def checked(*args: Any, **kwargs: Any) -> Any:
             if name == "join" and args:
                 items, total = [], 0
@@ -385,7 +385,7 @@ class _Session:
                 self.allocate(total, f".{name}()")
                 return value(items, *args[1:], **kwargs)
             try:
-                n = _growth(obj, name, args, kwargs)
+                n = growth(obj, name, args, kwargs)
             except (TypeError, ValueError, IndexError, KeyError):
                 n = 0  # malformed call: let the real method raise its own error
             self.allocate(n, f".{name}()")
@@ -401,7 +401,7 @@ class _Session:
         except (TypeError, ValueError):
             signature = None
 
-        @_wraps(fn)
+        @wraps(fn)
         def counted(*args: Any, **kwargs: Any) -> Any:
             self.check_time()
             self.api_calls += 1
