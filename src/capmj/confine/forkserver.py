@@ -6,9 +6,10 @@ descriptors through ``/proc``), and then serves the parent on its stdin/stdout:
 
 - ``load`` (the module's text, its name, whether to guard): remembered, and sent to a new task
   process forked for it;
-- ``fresh``: the current task process is killed, the tmpfs is emptied, and a new task process is
-  forked and loads the remembered module — a fresh process per episode for the cost of a ``fork``
-  and one ``exec`` of the module, not an interpreter start;
+- ``fresh``: the current task process is killed, the tmpfs is emptied, and a new task process
+  loads the remembered module — a fresh process per episode for the cost of one ``exec`` of the
+  module, not an interpreter start: the next task process is forked as soon as an answer is sent
+  (it holds no generated code until its load) and the module is compiled once, here;
 - anything else is relayed to the current task process, frame for frame.
 
 A task process (:mod:`capmj.confine.host`) is forked *before* any generated code exists in it,
@@ -185,28 +186,48 @@ def main() -> int:
     ctypes.CDLL(None).prctl(_PR_SET_DUMPABLE, 0, 0, 0, 0)
     module: bytes | None = None
     child: TaskProcess | None = None
+    ready: TaskProcess | None = None  # forked ahead, no generated code in it yet: waits for its load
     while True:
         try:
             payload = read_raw(inp, wire.MAX_TO_JAIL)
         except (EOFError, wire.WireError):
             return 0  # the parent closed the channel
-        op = json.loads(payload).get("op")  # the parent's own frame
+        msg = json.loads(payload)  # the parent's own frame
+        op = msg.get("op")
         if op in ("load", "fresh"):
             if child is not None:
                 child.close()
-                _wipe(TMP)
+                _wipe(TMP)  # before the next task process runs any generated code
             if op == "load":
                 module = payload
+                _precompile(str(msg.get("module")), str(msg.get("text")))
+                if ready is not None:  # forked before this code was compiled
+                    ready.close()
+                    ready = None
             if module is None:
                 write_raw(out, _frame({"error": {"type": "WireError", "message": "fresh before load"}}))
                 continue
-            child = TaskProcess()
-            payload = module
+            child, ready = ready or TaskProcess(), None
+            write_raw(out, child.ask(module))
+            ready = TaskProcess()  # while the parent works with the answer
+            continue
         if child is None:
             write_raw(out, _frame({"error": {"type": "WireError", "message": f"{op!r} before load"}}))
             continue
         write_raw(out, child.ask(payload))
         sys.stderr.flush()
+
+
+def _precompile(name: str, text: str) -> None:
+    """Compile the module once here (compiling runs none of it), so every task process forked
+    from now on inherits the code object instead of compiling it again; a module the compiler
+    refuses is left to the task process, which reports the error as its answer."""
+    from capmj.confine import host
+
+    try:
+        host.PRECOMPILED[name] = (text, compile(text, host.CANDIDATE_FILE, "exec"))
+    except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError):
+        host.PRECOMPILED.pop(name, None)
 
 
 if __name__ == "__main__":

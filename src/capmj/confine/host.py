@@ -31,6 +31,8 @@ from capmj.confine import wire
 
 OPS = ("load", "sample_scene", "oracle_goals", "evaluate")
 """The requests a task process answers."""
+PRECOMPILED: dict[str, tuple[str, Any]] = {}
+"""Module name -> (text, code object) compiled by the fork server before it forked this process."""
 _KEPT_SCENES = 64
 CANDIDATE_FILE = "<generated task>"
 """The file name the module's code carries (in tracebacks, and for the guard: code from here is the task's)."""
@@ -74,7 +76,9 @@ class Host:
         module = ModuleType(name)
         module.__file__ = CANDIDATE_FILE
         sys.modules[name] = module
-        exec(compile(text, CANDIDATE_FILE, "exec"), module.__dict__)  # noqa: S102 - inside the jail, by design
+        known = PRECOMPILED.get(name)
+        code = known[1] if known is not None and known[0] == text else compile(text, CANDIDATE_FILE, "exec")
+        exec(code, module.__dict__)  # noqa: S102 - inside the jail, by design
         if not hasattr(module, "TASK"):
             raise AttributeError("the module defines no TASK object (end it with TASK = YourTask())")
         task = module.TASK
@@ -159,4 +163,4 @@ def serve(inp: IO[bytes], out: IO[bytes]) -> None:
             wire.write_frame(out, _error(e))
 
 
-__all__ = ["CANDIDATE_FILE", "Host", "OPS", "serve"]
+__all__ = ["CANDIDATE_FILE", "Host", "OPS", "PRECOMPILED", "serve"]
