@@ -62,7 +62,7 @@ from typing import Any, Callable
 import numpy as np
 from shapely.geometry import LineString
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.codeprep import RESERVED, strip_benign_imports, undefined_calls
 from capmj.agents.lmp import LMPSession

@@ -16,7 +16,8 @@ import time
 
 import numpy as np
 
-from capmj.agents.api import FREE_CLEARANCE, FREE_GRID_STEP, PlannerAPI
+from capmj.agents.api.footprints import FREE_CLEARANCE, FREE_GRID_STEP
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.sim.world import World
 from capmj.tasks.protocol import make_scene

@@ -35,7 +35,7 @@ def run_scene(task_name: str, seed: int, states: tuple[str, ...]) -> list[dict]:
     """Score the perceiver on one scene in each requested state."""
     from capmj.agents.base import EpisodeContext
     from capmj.agents.oracle import OracleAgent
-    from capmj.agents.perception_audit import true_objects
+    from capmj.agents.api.perception_audit import true_objects
     from capmj.perception import ClassicalPerceiver, RGBDBundle
     from capmj.perception.score import score
     from capmj.sim.cameras import CameraRig

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 from typing import Any
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.lmp import Example, LMPSession, PromptFile, load_prompt
 from capmj.sim.objects import ObjectSpec, resting_z

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from shapely.geometry import Point, Polygon
 
-from capmj.agents.api import FREE_CLEARANCE, PlannerAPI
+from capmj.agents.api.footprints import FREE_CLEARANCE
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.sandbox import run_code
 from capmj.errors import PlanError

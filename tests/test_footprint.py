@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon
 
-from capmj.agents.footprints import Footprints
+from capmj.agents.api.footprints import Footprints
 from capmj.sim import footprint as F
 from capmj.sim.objects import BALL_RADIUS, BOWL_RADIUS, ObjectSpec
 from capmj.sim.pose import from_frame_2d, mat_yaw

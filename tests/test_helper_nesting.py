@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.lmp import LMPSession
 from capmj.errors import PlanError
 from capmj.sim.objects import ObjectSpec

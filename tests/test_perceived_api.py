@@ -7,7 +7,7 @@ from collections import Counter
 import pytest
 
 from capmj.agents.base import EpisodeContext
-from capmj.agents.perceived import PerceivedAPI, make_api
+from capmj.agents.api.perceived import PerceivedAPI, make_api
 from capmj.agents.reference import ReferenceAgent
 from capmj.runner import run_episode
 from capmj.sim.world import World

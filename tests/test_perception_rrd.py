@@ -20,7 +20,7 @@ import pytest
 pytest.importorskip("rerun")
 from test_rerun_log import _column, _read  # noqa: E402
 
-from capmj.agents.perception_audit import footprint_box, perceived_boxes  # noqa: E402
+from capmj.agents.api.perception_audit import footprint_box, perceived_boxes  # noqa: E402
 from capmj.agents.reference import ReferenceAgent  # noqa: E402
 from capmj.log.paths import DETECTIONS, PERCEPTION_LOG  # noqa: E402
 from capmj.log.perception3d import MATCH_COLORS, error_line  # noqa: E402

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import pytest
 
 from capmj.agents.base import EpisodeContext
-from capmj.agents.perceived import PerceivedAPI
+from capmj.agents.api.perceived import PerceivedAPI
 from capmj.bench.failures import classify
 from capmj.bench.migrate import as_record, load_record
 from capmj.perception import ClassicalPerceiver, Detection, RGBDBundle

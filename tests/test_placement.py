@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.sim.objects import BLOCK_SIZES, BOWL_HEIGHT, BOWL_RADIUS, FIXTURE_CLEARANCE, FIXTURE_HEIGHT, ObjectSpec
 from capmj.sim.world import World
 from capmj.tasks import predicates as P

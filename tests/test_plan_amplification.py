@@ -22,7 +22,7 @@ import pytest
 from hostile_plans import ALIASED, HOSTILE_PLANS, PLANTED_KEY, layer_of
 from llm_stub_server import StubLLMServer, prompt_text
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.llm_agent import LLMAgent
 from capmj.agents.llm_options import LLMAgentOptions
 from capmj.agents.lmp import DEFAULT_EPISODE_MAX_HELPER_CALLS, LMPSession

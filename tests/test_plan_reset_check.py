@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import Budget, EpisodeContext
 from capmj.agents.lmp import LMPSession
 from capmj.agents.sandbox import run_code

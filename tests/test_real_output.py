@@ -302,7 +302,7 @@ def test_the_documented_local_llm_command_parses() -> None:
 def test_near_miss_rules() -> None:
     from types import SimpleNamespace
 
-    from capmj.agents.api import near_miss
+    from capmj.agents.api.names import near_miss
 
     names = ["fixed red zone with obj_id 1", "movable small blue block with obj_id 2",
              "movable big blue block with obj_id 3", "movable small yellow block with obj_id 4",

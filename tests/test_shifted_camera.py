@@ -15,8 +15,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from capmj.agents.perceived import PerceivedAPI
-from capmj.agents.perception_audit import true_objects
+from capmj.agents.api.perceived import PerceivedAPI
+from capmj.agents.api.perception_audit import true_objects
 from capmj.agents.reference import ReferenceAgent
 from capmj.bench.migrate import as_record
 from capmj.perception import ClassicalPerceiver, Detection, RGBDBundle

@@ -45,7 +45,7 @@ from capmj.agents.llm_meter import LLMMeter, check_limits
 from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
-from capmj.agents.perceived import make_api
+from capmj.agents.api.perceived import make_api
 from capmj.agents.plan_check import plan_check
 from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.reporter import make_reporter

@@ -79,7 +79,7 @@ class LLMAgentOptions:
     replan_temperature: float = DEFAULT_REPLAN_TEMPERATURE
     replan_retries: int = DEFAULT_REPLAN_RETRIES
     perception: str = "state"
-    """The planner API's source: ``capmj.agents.perceived.PERCEPTION_MODES`` (checked by the bench's parser)."""
+    """The planner API's source: ``capmj.agents.api.perceived.PERCEPTION_MODES`` (checked by the bench's parser)."""
     plan_budget: SandboxBudget = DEFAULT_PLAN_BUDGET
     lmp_budget: SandboxBudget = DEFAULT_LMP_BUDGET
     max_fn_depth: int = 3

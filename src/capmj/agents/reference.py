@@ -1,7 +1,7 @@
 """The reference agent: runs the hand-written plan of a task through the planner API and sandbox.
 
 A reference plan is the code a perfect planner would write for the task: it sees exactly what LLM
-code sees — the API functions of :class:`~capmj.agents.api.PlannerAPI`, the goal text as ``goal``
+code sees — the API functions of :class:`~capmj.agents.api.planner_api.PlannerAPI`, the goal text as ``goal``
 and the object names as ``objects`` — and runs in the same sandbox.  It never reads the task's
 ``scene.info``; everything (colours, sizes, areas, directions) is parsed from the goal text and
 measured through the API.  Its success rate is therefore a check of the API, the sandbox, the
@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from capmj.agents.perceived import make_api
+from capmj.agents.api.perceived import make_api
 from capmj.agents.base import EpisodeContext
 from capmj.agents.sandbox import SandboxBudget, run_code
 from capmj.errors import AgentError
@@ -64,7 +64,7 @@ class ReferenceAgent:
     def __init__(self, budget: SandboxBudget | None = None, perception: str = "state") -> None:
         self.budget = budget or REFERENCE_BUDGET
         self.perception = perception
-        """``state`` (the API reads the simulator) or ``rgbd`` (the cameras: :mod:`capmj.agents.perceived`)."""
+        """``state`` (the API reads the simulator) or ``rgbd`` (the cameras: :mod:`capmj.agents.api.perceived`)."""
 
     def act(self, ctx: EpisodeContext) -> None:
         code, source = reference_plan(ctx.task)

@@ -33,7 +33,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from capmj.agents.api_names import near_miss, porting_difference
+from capmj.agents.api.names import near_miss, porting_difference
 from capmj.sim.objects import BLOCK_SIZES, ObjectSpec
 from capmj.tasks.predicates import in_square
 
@@ -66,7 +66,7 @@ def goal_objects(goal: str, objects: Sequence[Any]) -> dict[str, str]:
 
 class NamedPoses(dict):
     """``poses`` / ``object_positions``: keyed by capmj's names, and a near-miss key reads the one
-    object it can only mean, as the API's names do (:func:`capmj.agents.api_names.near_miss`).
+    object it can only mean, as the API's names do (:func:`capmj.agents.api.names.near_miss`).
     CapRavens' checking code indexes the dict with names such as ``'red block with obj_id 1'``;
     an obj_id 0 or a fixed block is a PortingDifference naming why, anything else a KeyError."""
 

@@ -3,7 +3,7 @@
 Recorded: capmj's git revision and dirty flag (when run from a checkout), the versions of every
 package that shapes results, sha256 of every prompt file and every task plugin module used, the
 model string and the API base *host* (never a key, never the full URL's credentials), what the
-planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.perceived`), the
+planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.api.perceived`), the
 sandbox, simulation and LLM budgets, and ``PYTHONHASHSEED``.  :func:`differences` lists the
 manifest entries in which combined runs disagree, for ``report`` to warn about.
 """

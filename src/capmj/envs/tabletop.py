@@ -197,8 +197,8 @@ class TabletopEnv(dm_env.Environment):
         self._ctx = EpisodeContext(self.task, self.seed, self.scene, self.world,
                                    budget=Budget(max_primitives=self.max_steps))
         if self.config.perception != STATE:
-            from capmj.agents.perceived import PerceivedScene, PerceivingContext
-            from capmj.agents.perception_audit import PerceptionAudit
+            from capmj.agents.api.perceived import PerceivedScene, PerceivingContext
+            from capmj.agents.api.perception_audit import PerceptionAudit
 
             audit = PerceptionAudit(self._ctx, self.config.perception)
             self._perceived = PerceivedScene(self.world, load_perceiver(self.config.perception), observer=audit.observe)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.llm_options import DEFAULT_LMP_BUDGET
 from capmj.agents.llm_meter import LLMMeter, parse_price

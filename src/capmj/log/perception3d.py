@@ -2,7 +2,7 @@
 
 After every perception call (the first view and one after each pick-and-place) the planner API's
 objects arrive as :class:`capmj.record.PerceivedBox` records, already judged against the truth
-by :mod:`capmj.agents.perception_audit`.  They are drawn as one ``Boxes3D`` at
+by :mod:`capmj.agents.api.perception_audit`.  They are drawn as one ``Boxes3D`` at
 :data:`~capmj.log.paths.DETECTIONS` at the call's time, so at any point of the timeline the
 viewer shows the view the plan was acting on, in the same space as the true objects
 (``/world/objects``): a box offset from its object is a position error, a red box is a false

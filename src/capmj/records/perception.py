@@ -3,7 +3,7 @@
 Why a record: in ``--perception rgbd`` an episode's outcome depends on what the cameras made of
 the table, so the perception error is a result like success, not a debugging aid.  The planner
 API's view (the tracked detections, :class:`capmj.perception.track.Tracker`) is scored against
-the truth after every perception call by :mod:`capmj.agents.perception_audit` — the truth is
+the truth after every perception call by :mod:`capmj.agents.api.perception_audit` — the truth is
 read for this record only and never reaches the perceiver — and the figures land here, one
 :class:`PerceptionCall` per call.  Failure attribution (:mod:`capmj.bench.failures`) reads
 :meth:`PerceptionNotes.erred`; the summary (:mod:`capmj.bench.results`)

@@ -1,7 +1,7 @@
 """What an object covers of the table seen from above: the one footprint model of capmj.
 
 A footprint is a function of an object's spec and pose only (no MuJoCo model), so the planner API
-(:mod:`capmj.agents.footprints`, live world poses or perceived ones) and the success predicates
+(:mod:`capmj.agents.api.footprints`, live world poses or perceived ones) and the success predicates
 (:mod:`capmj.tasks.predicates`, a settled :class:`~capmj.sim.state.SceneState`) measure the same
 table.  Before this module they measured three different ones: the planner read its geoms' boxes
 and switched to a world box beyond 20° of tilt, the judge rebuilt centred boxes from the half

@@ -81,7 +81,7 @@ class Primitives:
         radius, zones counted, a bowl's rim rather than its floor.  The descent starts
         ``approach_gap`` above it and stops at contact anyway.  It is not the height an object
         comes to rest on (a bowl's floor, never a zone): that is the planner API's
-        :meth:`capmj.agents.footprints.Footprints.support_z`, on capmj's one footprint model
+        :meth:`capmj.agents.api.footprints.Footprints.support_z`, on capmj's one footprint model
         (:mod:`capmj.sim.footprint`).
         """
         ids, lo, hi = self.world.object_boxes()

@@ -1,7 +1,7 @@
 """What the planner API accepts as a value, and how it shows one: positions, poses, normalised
 workspace coordinates, call-log summaries.
 
-Shared by :mod:`capmj.agents.api` (capmj's functions) and :mod:`capmj.agents.capravens_api`
+Shared by :mod:`capmj.agents.api.planner_api` (capmj's functions) and :mod:`capmj.agents.api.capravens`
 (CapRavens' names), so both read a position, a pose and a normalised point the same way.
 """
 

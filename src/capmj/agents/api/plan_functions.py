@@ -1,29 +1,29 @@
 """The planner API functions, one method each: their names, signatures and docstrings are the API
 the prompts document (``prompts/planner.py``; the docstrings are the full statement).
 
-:class:`PlanFunctions` works over a :class:`~capmj.agents.api.PlannerAPI`, which resolves names,
-checks arguments and logs each call; the geometry is :mod:`capmj.agents.footprints`.  Kept apart
+:class:`PlanFunctions` works over a :class:`~capmj.agents.api.planner_api.PlannerAPI` (through its public
+interface, :class:`~capmj.agents.api.interface.PlannerInterface`), which resolves names, checks
+arguments and logs each call; the geometry is :mod:`capmj.agents.api.footprints`.  Kept apart
 from the facade so that the list of what plan code may call (:data:`API_FUNCTIONS`) and what each
 call promises read in one place.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from capmj.agents.api_values import Coordinate, denormalize_uv
-from capmj.agents.api_values import summary as _summary
-from capmj.agents.capravens_api import CapRavensFunctions
-from capmj.agents.footprints import FREE_CLEARANCE
+from capmj.agents.api.values import Coordinate, denormalize_uv
+from capmj.agents.api.values import summary as _summary
+from capmj.agents.api.capravens import CapRavensFunctions
+from capmj.agents.api.footprints import FREE_CLEARANCE
+from capmj.agents.api.interface import PlannerInterface
 from capmj.agents.sandbox.sizes import capped_text
 from capmj.errors import TextBudgetExceeded
 from capmj.sim.footprint import ROUND_KINDS
 from capmj.sim.pose import quat_euler_xyz, wxyz
 
-if TYPE_CHECKING:
-    from capmj.agents.api import PlannerAPI
 
 CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
 SIDE_NAMES = ("top side", "right side", "bottom side", "left side")
@@ -39,10 +39,10 @@ class PlanFunctions(CapRavensFunctions):
     wrapped for the call log; a method calling another calls it unlogged (``get_obj_pos`` of a list
     is one logged call), except that :meth:`stack_objects_in_order` logs each step it takes
     (through the logged functions given to :meth:`use_logged`).  Names are resolved, arguments
-    checked and logged by the :class:`PlannerAPI`, and the geometry is :mod:`capmj.agents.footprints`.
+    checked and logged by the :class:`PlannerAPI`, and the geometry is :mod:`capmj.agents.api.footprints`.
     """
 
-    def __init__(self, api: PlannerAPI) -> None:
+    def __init__(self, api: PlannerInterface) -> None:
         self._api = api
         self._logged: Mapping[str, Callable[..., Any]] = {}
 
@@ -52,7 +52,7 @@ class PlanFunctions(CapRavensFunctions):
 
     def get_obj_names(self) -> list[str]:
         """Names of every object in the scene (read from the live world)."""
-        return self._api._names()
+        return self._api.object_names()
 
     def get_obj_pos(self, obj):
         """[x, y, z] (m) of an object's centre; a list of names gives a list.
@@ -65,7 +65,7 @@ class PlanFunctions(CapRavensFunctions):
         """
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_pos(o) for o in obj]
-        return [Coordinate(v) for v in self._api._pos(self._api._resolve(obj).obj_id)]
+        return [Coordinate(v) for v in self._api.position(self._api.resolve(obj).obj_id)]
 
     def get_obj_rot(self, obj):
         """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list.
@@ -73,7 +73,7 @@ class PlanFunctions(CapRavensFunctions):
         Objects start at random yaws (about z); an upright object's yaw is 2 atan2(z, w)."""
         if isinstance(obj, (list, tuple, np.ndarray)):
             return [self.get_obj_rot(o) for o in obj]
-        return [Coordinate(v) for v in self._api._quat_xyzw(self._api._resolve(obj).obj_id)]
+        return [Coordinate(v) for v in self._api.quat_xyzw(self._api.resolve(obj).obj_id)]
 
     def get_bbox(self, obj):
         """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m), the thesis's box, not
@@ -89,18 +89,18 @@ class PlanFunctions(CapRavensFunctions):
             if len(obj) == 0:
                 raise ValueError("get_bbox needs an object name (a list gives its first object's box), got []")
             return self.get_bbox(obj[0])
-        o = self._api._resolve(obj)
-        lo, hi = self._api._world.aabb(o.obj_id)
+        o = self._api.resolve(obj)
+        lo, hi = self._api.world.aabb(o.obj_id)
         if o.kind in ROUND_KINDS:  # the geoms' boxes turn with the yaw, the disc does not
-            c, r = self._api._pos(o.obj_id), o.half_extents[0]
+            c, r = self._api.position(o.obj_id), o.half_extents[0]
             lo[:2], hi[:2] = c[:2] - r, c[:2] + r
         return tuple(float(v) for v in (*lo, *hi))
 
     def get_obj_pos_dict(self) -> dict[str, tuple[list[float], list[float]]]:
         """{name: ([x, y, z], [roll, pitch, yaw])} for every object (m, rad; Euler XYZ)."""
         api = self._api
-        return {o.name: ([float(v) for v in api._pos(o.obj_id)], quat_euler_xyz(wxyz(api._quat_xyzw(o.obj_id))))
-                for o in api._objects()}
+        return {o.name: ([float(v) for v in api.position(o.obj_id)], quat_euler_xyz(wxyz(api.quat_xyzw(o.obj_id))))
+                for o in api.objects()}
 
     def get_obj_positions_np(self, names) -> np.ndarray:
         """(n, 3) array of object centres (m)."""
@@ -114,7 +114,7 @@ class PlanFunctions(CapRavensFunctions):
 
     def get_color(self, obj) -> str:
         """The colour name of an object ("red", "blue", ...)."""
-        return self._api._resolve(obj).color
+        return self._api.resolve(obj).color
 
     def denormalize(self, pos):
         """Normalised [u, v] (u left→right, v bottom→top, both in [0, 1]) → world [x, y]:
@@ -130,13 +130,13 @@ class PlanFunctions(CapRavensFunctions):
 
     def get_corner_name(self, pos) -> str:
         """Name of the workspace corner nearest to a position ("top left corner", ...)."""
-        p = self._api._xy(pos)
+        p = self._api.xy(pos)
         corners = np.array([denormalize_uv(u, v) for u, v in _CORNERS_UV])
         return CORNER_NAMES[int(np.argmin(np.hypot(*(corners - p).T)))]
 
     def get_side_name(self, pos) -> str:
         """Name of the workspace side nearest to a position ("top side", "right side", ...)."""
-        p = self._api._xy(pos)
+        p = self._api.xy(pos)
         sides = np.array([denormalize_uv(u, v) for u, v in _SIDES_UV])
         return SIDE_NAMES[int(np.argmin(np.hypot(*(sides - p).T)))]
 
@@ -149,7 +149,7 @@ class PlanFunctions(CapRavensFunctions):
         block and whatever is stacked on it).  ``targ`` a list of positions or poses: the objects
         occupying any of them, each once.  Zones, bowls and the like count as objects.
         """
-        return self._api._occupied(targ, float(r))
+        return self._api.occupied(targ, float(r))
 
     def get_random_free_pos(self, targ=None, area=None, r: float = FREE_CLEARANCE, search_area=None) -> list[float]:
         """A random free position [x, y, 0.0] (m) on the table.
@@ -160,7 +160,7 @@ class PlanFunctions(CapRavensFunctions):
         not occupying ``targ`` (names, positions or poses to keep ``2 r`` from — objects are
         avoided anyway).  Raises ValueError when nothing is free.
         """
-        return self._api._free_pos(targ, search_area if area is None else area, float(r))
+        return self._api.free_position(targ, search_area if area is None else area, float(r))
 
     def put_first_on_second(self, obj, target) -> None:
         """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
@@ -181,7 +181,7 @@ class PlanFunctions(CapRavensFunctions):
         Blocks are symmetric every 90°, so a block turns by at most 45°.
         Raises ValueError for bad arguments and RuntimeError when the robot fails.
         """
-        self._api._put(obj, target)
+        self._api.put(obj, target)
 
     def stack_objects_in_order(self, object_names, targ=None) -> None:
         """Stack ``object_names`` bottom ([0]) to top; [0] goes on ``targ`` when given, otherwise
@@ -203,14 +203,14 @@ class PlanFunctions(CapRavensFunctions):
         """Record a message in the episode log.  The messages of one attempt hold at most
         ``Budget.max_said_chars`` characters together; one that would pass it is refused
         (:class:`~capmj.errors.TextBudgetExceeded`) before its text is made."""
-        cap = self._api._ctx.budget.max_said_chars
+        cap = self._api.ctx.budget.max_said_chars
         text = capped_text(msg, cap - self._api.said_chars)
         if text is None:
             raise TextBudgetExceeded(f"say() would record more than {cap} characters in this attempt "
                                      "(Budget.max_said_chars)")
         self._api.said_chars += len(text)
         self._api.messages.append(text)
-        self._api._ctx.recorder.text("planner/say", text, self._api._world.time)
+        self._api.ctx.recorder.text("planner/say", text, self._api.world.time)
 
 
 API_FUNCTIONS: tuple[str, ...] = (

@@ -3,7 +3,7 @@
 Why in the agents layer and not in the perceiver: the perceiver must never see the truth (it
 gets images and cameras, nothing else), but the benchmark must say what perception got wrong in
 every episode and whether a miss was perception's fault.  :class:`PerceptionAudit` sits beside
-the perceived planner API (:mod:`capmj.agents.perceived`), which hands it each new view of the
+the perceived planner API (:mod:`capmj.agents.api.perceived`), which hands it each new view of the
 table *after* the view is made; it reads the world's true objects, matches them to the API's
 objects (:func:`capmj.perception.score.score`) and writes a
 :class:`~capmj.records.PerceptionNotes` into ``ctx.notes["perception"]``, which the runner puts

@@ -2,8 +2,8 @@
 
 :class:`PlannerAPI` wraps one :class:`~capmj.agents.base.EpisodeContext` and hands out plain
 functions through :meth:`PlannerAPI.functions`: the methods of
-:class:`~capmj.agents.plan_functions.PlanFunctions` (one per API function, named in
-:data:`~capmj.agents.plan_functions.API_FUNCTIONS`), each wrapped in a closure that logs the call.
+:class:`~capmj.agents.api.plan_functions.PlanFunctions` (one per API function, named in
+:data:`~capmj.agents.api.plan_functions.API_FUNCTIONS`), each wrapped in a closure that logs the call.
 Sandboxed code cannot reach a closure's cells (dunder and ``_private`` attribute access is rejected by the sandbox), and every
 value the functions return is plain data (str, float, list, tuple, dict, numpy array), so there is
 no public attribute path from plan code to the ``World``, ``MjModel`` or ``MjData``.
@@ -16,15 +16,15 @@ Conventions (the spec's, stated at every function):
 * Rotations at this API are quaternions **(x, y, z, w)** (MuJoCo and ``Pose`` use (w, x, y, z)).
 * Object names are the unique ``ObjectSpec.name`` strings ("movable small blue block with
   obj_id 3"), read from the live world on every call.  An int obj_id is accepted wherever a name
-  is.  A near-miss name resolves when exactly one object fits it (see :func:`~capmj.agents.api_names.near_miss`: missing
+  is.  A near-miss name resolves when exactly one object fits it (see :func:`~capmj.agents.api.names.near_miss`: missing
   movable/fixed/size words, underscores, an id whose object has the given words, a unique
   colour + kind); each such resolution is logged.  Otherwise ``ValueError`` lists the closest
   and the valid names.
 * Footprints: capmj's one footprint model (:mod:`capmj.sim.footprint`, the judge's too): blocks,
   zones and fixture walls are oriented rectangles at the current yaw, bowls and balls discs; an
   object tilted more than 15° uses its world xy box.  The geometry (footprints, surfaces,
-  occupancy, free positions) lives in :mod:`capmj.agents.footprints`, the reading of names in
-  :mod:`capmj.agents.api_names`; this module resolves names, validates arguments and logs.
+  occupancy, free positions) lives in :mod:`capmj.agents.api.footprints`, the reading of names in
+  :mod:`capmj.agents.api.names`; this module resolves names, validates arguments and logs.
 
 Every call is appended to :attr:`PlannerAPI.call_log` (function, arguments, result summary or
 error, simulated time) for the episode log.
@@ -36,18 +36,19 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from capmj.agents.api_names import lookup, near_miss
-from capmj.agents.api_values import ONE_ELEMENT_LISTS, Coordinate, denormalize_uv
-from capmj.agents.api_values import is_pose as _is_pose
-from capmj.agents.api_values import is_vector as _is_vector
-from capmj.agents.api_values import summary as _summary
+from capmj.agents.api.footprints import Footprints
+from capmj.agents.api.names import lookup
+from capmj.agents.api.plan_functions import API_FUNCTIONS, PlanFunctions
+from capmj.agents.api.values import ONE_ELEMENT_LISTS, Coordinate
+from capmj.agents.api.values import is_pose as _is_pose
+from capmj.agents.api.values import is_vector as _is_vector
+from capmj.agents.api.values import summary as _summary
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import FREE_CLEARANCE, FREE_GRID_STEP, REACH_RADIUS, Footprints
-from capmj.agents.plan_functions import API_FUNCTIONS, PlanFunctions
 from capmj.errors import MotionFailed, PortingDifference, describe
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import quat_yaw, wxyz
+from capmj.sim.world import World
 from capmj.tasks.protocol import episode_rng
 
 
@@ -69,17 +70,31 @@ class PlannerAPI:
         self.resolved: list[tuple[str, str]] = []
         """(name as written, object it was resolved to) for every near-miss name accepted."""
 
-    # ================================================================== names
-    def _objects(self) -> tuple[ObjectSpec, ...]:
-        return tuple(self._world.objects)  # read live on every call
+    # ================================================================== the facade's interface
+    # (what the API functions read and do: capmj.agents.api.interface.PlannerInterface)
+    @property
+    def ctx(self) -> EpisodeContext:
+        """The episode context the API acts through (budgets, recorder, pick-and-place)."""
+        return self._ctx
 
-    def _names(self) -> list[str]:
-        return [o.name for o in self._objects()]
+    @property
+    def world(self) -> World:
+        """The world the API reads (live)."""
+        return self._world
 
-    def _resolve(self, obj: Any) -> ObjectSpec:
+    @property
+    def footprints(self) -> Footprints:
+        """Table geometry (footprints, surfaces, occupancy, free positions), read live."""
+        return self._footprints
+
+    def objects(self) -> tuple[ObjectSpec, ...]:
+        """Every object's spec, read live on every call."""
+        return tuple(self._world.objects)
+
+    def resolve(self, obj: Any) -> ObjectSpec:
         """The spec of a name (exact; case and spacing forgiven; a near miss, logged) or an int
-        obj_id (:func:`capmj.agents.api_names.lookup`)."""
-        fit, near = lookup(obj, self._objects())
+        obj_id (:func:`capmj.agents.api.names.lookup`)."""
+        fit, near = lookup(obj, self.objects())
         if near:
             self.resolved.append((obj, fit.name))
             if self.call_log:  # the call being made: the log shows what the name meant
@@ -87,10 +102,10 @@ class PlannerAPI:
         return fit
 
     # ================================================================== poses
-    def _pos(self, oid: int) -> np.ndarray:
+    def position(self, oid: int) -> np.ndarray:
         return np.asarray(self._world.pose(oid).pos, float)
 
-    def _quat_xyzw(self, oid: int) -> list[float]:
+    def quat_xyzw(self, oid: int) -> list[float]:
         return [float(v) for v in self._world.pose(oid).quat_xyzw]
 
     # ================================================================== logging
@@ -127,11 +142,11 @@ class PlannerAPI:
 
     def object_names(self) -> list[str]:
         """The names of every object, as this API knows them (unlogged: for prompts and plan globals)."""
-        return self._names()
+        return [o.name for o in self.objects()]
 
     def objects_text(self) -> str:
         """The ``objects = [...]`` line listing every object of the scene for prompts."""
-        return f"objects = {self._names()!r}"
+        return f"objects = {self.object_names()!r}"
 
     # ================================================================== the API
     def functions(self) -> dict[str, Callable[..., Any]]:
@@ -143,10 +158,10 @@ class PlannerAPI:
         return dict(logged)
 
     # ================================================================== implementations
-    def _xy(self, pos: Any) -> np.ndarray:
+    def xy(self, pos: Any) -> np.ndarray:
         """xy of a position, a pose or an object name."""
         if isinstance(pos, (str, int, np.integer)) and not isinstance(pos, bool):
-            return self._pos(self._resolve(pos).obj_id)[:2]
+            return self.position(self.resolve(pos).obj_id)[:2]
         if _is_pose(pos):
             pos = pos[0]
         if not _is_vector(pos):
@@ -155,18 +170,18 @@ class PlannerAPI:
             raise ValueError(f"expected a position [x, y] or [x, y, z], got {_summary(pos, 80)}")
         return np.asarray(pos, float)[:2]
 
-    def _occupied(self, targ: Any, r: float) -> list[str]:
+    def occupied(self, targ: Any, r: float) -> list[str]:
         if isinstance(targ, (str, int, np.integer)) and not isinstance(targ, bool):
-            return [o.name for o in self._footprints.overlapping(self._resolve(targ))]
+            return [o.name for o in self._footprints.overlapping(self.resolve(targ))]
         if isinstance(targ, (list, tuple)) and len(targ) == 1 and (_is_vector(targ[0]) or _is_pose(targ[0])):
             targ = targ[0]  # the original API's one-element position lists
         if (isinstance(targ, (list, tuple)) and len(targ) > 1 and not _is_vector(targ) and not _is_pose(targ)
                 and all(_is_vector(t) or _is_pose(t) for t in targ)):
-            hits = [o.name for t in targ for o in self._footprints.within(self._xy(t), r)]
+            hits = [o.name for t in targ for o in self._footprints.within(self.xy(t), r)]
             return list(dict.fromkeys(hits))  # several target positions: what occupies any of them
-        return [o.name for o in self._footprints.within(self._xy(targ), r)]
+        return [o.name for o in self._footprints.within(self.xy(targ), r)]
 
-    def _free_pos(self, targ: Any, area: Any, r: float) -> list[float]:
+    def free_position(self, targ: Any, area: Any, r: float) -> list[float]:
         if area is None and targ is not None and _is_vector(targ, (4,)):
             area, targ = targ, None  # the original accepted the search area as the first argument
         if area is None:
@@ -179,7 +194,7 @@ class PlannerAPI:
         def reserved() -> Iterator[np.ndarray]:
             # lazy, so that a bad area is reported before a bad targ (as the search checks it first)
             for t in self._targets(targ):
-                yield self._xy(t)
+                yield self.xy(t)
 
         return self._footprints.free_position(area, r, self._rng, reserved())
 
@@ -193,35 +208,35 @@ class PlannerAPI:
             return list(targ)
         raise ValueError(f"targ must be a name, a position, a pose or a list of them, got {_summary(targ, 80)}")
 
-    def _reset_scene(self) -> None:
+    def reset_scene(self) -> None:
         """The episode's initial scene back, within the attempt (a plan's ``reset()``)."""
         self._ctx.reset_scene()
 
-    def _put(self, obj: Any, target: Any) -> None:
+    def put(self, obj: Any, target: Any) -> None:
         w = self._world
         if obj is None or target is None:
             raise ValueError("put_first_on_second needs an object and a target")
         # --- what to pick
         held: ObjectSpec | None = None
         if _is_vector(obj) or _is_pose(obj):
-            pick = self._xy(obj)
+            pick = self.xy(obj)
         else:
-            held = self._resolve(obj)
+            held = self.resolve(obj)
             if held.fixed:
                 raise PortingDifference(f"{held.name!r} is fixed and cannot be picked")
             above = self._footprints.resting_on(held)
             if above:
                 raise ValueError(f"cannot pick {held.name!r}: {above[0].name!r} lies on top of it; move that first")
-            pick = self._pos(held.obj_id)[:2]
+            pick = self.position(held.obj_id)[:2]
         exclude = {held.obj_id} if held is not None else set()
         half = held.half_extents[2] if held is not None else 0.02
         # --- where to put it
         yaw: float | None = None
         if isinstance(target, (str, int, np.integer)) and not isinstance(target, bool):
-            t = self._resolve(target)
+            t = self.resolve(target)
             if held is not None and t.obj_id == held.obj_id:
                 raise ValueError(f"cannot put {held.name!r} on itself")
-            c = self._pos(t.obj_id)
+            c = self.position(t.obj_id)
             xy = c[:2]
             if t.kind == "bowl":
                 surface = self._footprints.support_z(xy, exclude)
@@ -258,8 +273,4 @@ class PlannerAPI:
             raise MotionFailed(f"put_first_on_second: picked {got!r} instead of {held.name!r}", status="wrong_object")
 
 
-# Re-exported, for the import paths callers use: the functions and their names
-# (``capmj.agents.api.PlanFunctions`` in docs/llm.md), the geometry constants (tests, benchmarks)
-# and the name readings (tests/test_real_output.py imports ``near_miss`` from here).
-__all__ = ["API_FUNCTIONS", "FREE_CLEARANCE", "FREE_GRID_STEP", "PlanFunctions", "PlannerAPI", "REACH_RADIUS",
-           "denormalize_uv", "near_miss"]
+__all__ = ["PlannerAPI"]

@@ -3,7 +3,7 @@ the error that says what was meant when none fits.
 
 Plan code writes names as small models write them ("brown bowl", "movable_blue_block_with_obj_id_3",
 "yellow block with obj_id 4"); :func:`lookup` accepts exactly the readings that can mean one object
-and nothing else, so a name is never guessed.  Shared by the planner API (:mod:`capmj.agents.api`)
+and nothing else, so a name is never guessed.  Shared by the planner API (:mod:`capmj.agents.api.planner_api`)
 and the reporter's scene (:mod:`capmj.agents.reporter_env`), so both read a name the same way.
 """
 
@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from capmj.agents.api_values import summary as _summary
+from capmj.agents.api.values import summary as _summary
 from capmj.errors import PortingDifference, UnknownObjectError
 from capmj.sim.objects import ObjectSpec
 

@@ -11,7 +11,7 @@ position is.
 :class:`Footprints` reads specs and poses live through the callables it is given (normally
 :meth:`Footprints.from_world`; the perceived API passes its detections), so every query answers
 for the scene as it is now.  It knows nothing of names, episodes or call logging: that is the
-facade in :mod:`capmj.agents.api`.
+facade in :mod:`capmj.agents.api.planner_api`.
 """
 
 from __future__ import annotations

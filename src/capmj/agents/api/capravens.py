@@ -4,34 +4,30 @@ do not use.
 CapRavens' few-shot examples call ``denormalize_xy``, ``denormalize_bbox``, ``is_obj_visible``,
 ``bbox_contains_pt`` and ``reset``; capmj's prompts have their own names for most of that
 (``denormalize``, ``is_target_occupied``) and leave resetting to the benchmark's loop.  The methods of :class:`CapRavensFunctions` make the original's code run
-as written (``benchmarks/capravens_examples.py`` counts how much does); :class:`~capmj.agents.api.
+as written (``benchmarks/capravens_examples.py`` counts how much does); :class:`~capmj.agents.api.plan_functions.
 PlanFunctions` inherits them, so they are planner API functions like any other (named in
 ``API_FUNCTIONS``, logged; all read-only but ``reset``, which only plan code gets).  They are not listed in ``prompts/planner.py``: small
 models read that prompt, and these names only serve code ported from CapRavens (the porting table
 of ``docs/llm.md`` lists them).  Names are resolved and geometry computed by the
-:class:`~capmj.agents.api.PlannerAPI` and :mod:`capmj.agents.footprints`, as for every function.
+:class:`~capmj.agents.api.planner_api.PlannerAPI` and :mod:`capmj.agents.api.footprints`, as for every function.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-from capmj.agents.api_values import denormalize_uv, is_vector, summary
+from capmj.agents.api.interface import PlannerInterface
+from capmj.agents.api.values import denormalize_uv, is_vector, summary
 from capmj.errors import PortingDifference, UnknownObjectError
-
-if TYPE_CHECKING:
-    from capmj.agents.api import PlannerAPI
 
 INSIDE_TOL = 1e-9
 """A centre this close (m) to a footprint counts as inside it: the edge belongs to the footprint."""
 
 
 class CapRavensFunctions:
-    """The CapRavens-named planner API functions over a :class:`~capmj.agents.api.PlannerAPI`."""
+    """The CapRavens-named planner API functions over a :class:`~capmj.agents.api.planner_api.PlannerAPI`."""
 
-    _api: PlannerAPI
+    _api: PlannerInterface
 
     def denormalize_xy(self, pos, size=None):
         """CapRavens' name for ``denormalize``: normalised [u, v] → world [x, y] (a numpy array,
@@ -59,7 +55,7 @@ class CapRavensFunctions:
         """Whether the scene has an object of that name (or obj_id): True exactly when the other
         functions accept the name, near-miss names included (CapRavens' ``is_obj_visible``)."""
         try:
-            self._api._resolve(obj)
+            self._api.resolve(obj)
         except (UnknownObjectError, PortingDifference):
             return False
         return True
@@ -71,11 +67,11 @@ class CapRavensFunctions:
         block on a stack in a zone is in it.  (The name says bounding box, but a turned zone's
         world box is larger than the zone, and capmj has one rule for "in": the footprint.)"""
         api = self._api
-        container, obj = api._resolve(container_name), api._resolve(obj_name)
+        container, obj = api.resolve(container_name), api.resolve(obj_name)
         if container.obj_id == obj.obj_id:
             raise ValueError(f"bbox_contains_pt needs two different objects, got {obj.name!r} twice")
-        xy = api._pos(obj.obj_id)[:2]
-        return api._footprints.distance(xy, container) <= INSIDE_TOL
+        xy = api.position(obj.obj_id)[:2]
+        return api.footprints.distance(xy, container) <= INSIDE_TOL
 
     def reset(self) -> None:
         """CapRavens' ``reset()``: the scene back to the episode's initial state, so a plan whose
@@ -88,7 +84,7 @@ class CapRavensFunctions:
         steps spent before it still count against the attempt's budgets.  Recorded in the call
         log and as ``planner/reset`` in the episode's log."""
         api = self._api
-        before = api._world.time
-        api._reset_scene()
-        api._ctx.recorder.text("planner/reset", f"scene reset to the episode's initial state at t={before:.2f}s "
-                               "(budgets keep counting)", api._world.time)
+        before = api.world.time
+        api.reset_scene()
+        api.ctx.recorder.text("planner/reset", f"scene reset to the episode's initial state at t={before:.2f}s "
+                               "(budgets keep counting)", api.world.time)

@@ -1,6 +1,6 @@
 """The planner API answered from the cameras (``--perception rgbd``) instead of the simulator.
 
-:class:`PerceivedAPI` is the :class:`~capmj.agents.api.PlannerAPI` with its view of the table
+:class:`PerceivedAPI` is the :class:`~capmj.agents.api.planner_api.PlannerAPI` with its view of the table
 swapped: names, positions, yaws, boxes and footprints come from :class:`PerceivedScene`, the
 tracked detections of the built-in perceiver (:mod:`capmj.perception`), never from the world's
 object state.  Everything else is unchanged — name resolution, argument checks, logging, the
@@ -17,7 +17,7 @@ theirs (:class:`capmj.perception.track.Tracker`).
 The primitive reports which object it gripped by its simulator id; the robot only knows that it
 gripped something, so the result is translated to the perceived object at the pick point.
 
-Beside the API runs a :class:`~capmj.agents.perception_audit.PerceptionAudit`: it scores every
+Beside the API runs a :class:`~capmj.agents.api.perception_audit.PerceptionAudit`: it scores every
 view against the truth for the episode's record (never feeding anything back into perception),
 and tells the API when a failed pick missed because the perceived point was off the object, so
 that the failure is raised as :class:`~capmj.errors.PerceptionFailed` (same text, its own class).
@@ -31,10 +31,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from capmj.agents.api import PlannerAPI
+from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
-from capmj.agents.footprints import Footprints
-from capmj.agents.perception_audit import PerceptionAudit
+from capmj.agents.api.footprints import Footprints
+from capmj.agents.api.perception_audit import PerceptionAudit
 from capmj.errors import MotionFailed, PerceptionFailed
 from capmj.perception import ClassicalPerceiver, Perceiver, RGBDBundle
 from capmj.perception.plugins import STATE, load_perceiver
@@ -168,15 +168,15 @@ class PerceivedAPI(PlannerAPI):
         self._ctx = self._perceiving  # type: ignore[assignment]
         self._footprints = self.scene.footprints()
 
-    def _reset_scene(self) -> None:
-        super()._reset_scene()
+    def reset_scene(self) -> None:
+        super().reset_scene()
         self.scene.restart()
 
-    def _put(self, obj: Any, target: Any) -> None:
+    def put(self, obj: Any, target: Any) -> None:
         """The API's pick-and-place; a miss perception caused is a :class:`PerceptionFailed`."""
         self._perceiving.missed = False
         try:
-            super()._put(obj, target)
+            super().put(obj, target)
         except MotionFailed as exc:
             if self._perceiving.missed:
                 raise PerceptionFailed(str(exc), status=exc.status) from exc
