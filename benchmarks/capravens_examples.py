@@ -64,8 +64,8 @@ from shapely.geometry import LineString
 
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
-from capmj.agents.codeprep import RESERVED, strip_benign_imports, undefined_calls
-from capmj.agents.lmp import LMPSession
+from capmj.agents.lmp.codeprep import RESERVED, strip_benign_imports, undefined_calls
+from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import object_names
 from capmj.agents.reporter_env import reporter_env
 from capmj.agents.sandbox import PROVIDED_NAMES, SandboxBudget, run_code

@@ -20,7 +20,7 @@ import sys
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
-from capmj.agents.lmp import load_prompt, load_system_prompt, prompts_dir  # noqa: E402
+from capmj.agents.prompt_files import load_prompt, load_system_prompt, prompts_dir  # noqa: E402
 
 MODEL = "gpt-4o-mini"
 ORIGINAL_PLANNER_TOKENS = 10_000

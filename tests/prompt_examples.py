@@ -14,7 +14,8 @@ from typing import Any
 
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
-from capmj.agents.lmp import Example, LMPSession, PromptFile, load_prompt
+from capmj.agents.lmp.session import LMPSession
+from capmj.agents.prompt_files import Example, PromptFile, load_prompt
 from capmj.sim.objects import ObjectSpec, resting_z
 from capmj.sim.world import World
 from capmj.tasks.protocol import Scene

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import pytest
 
 from capmj.agents.api.planner_api import PlannerAPI
-from capmj.agents.lmp import LMPSession
+from capmj.agents.lmp.session import LMPSession
 from capmj.errors import PlanError
 from capmj.sim.objects import ObjectSpec
 from test_api import make_ctx

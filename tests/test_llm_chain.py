@@ -430,7 +430,7 @@ def test_agent_options_match_the_bench_factory() -> None:
 # code preparation (pure functions)
 # ------------------------------------------------------------------------------------------------
 def test_undefined_calls_finds_only_missing_bare_calls() -> None:
-    from capmj.agents.lmp import undefined_calls
+    from capmj.agents.lmp.codeprep import undefined_calls
 
     src = ("def helper(x):\n    return x\n"
            "a = helper(get_obj_pos('b'))\n"
@@ -445,7 +445,7 @@ def test_undefined_calls_finds_only_missing_bare_calls() -> None:
 
 
 def test_strip_benign_imports_keeps_dangerous_ones() -> None:
-    from capmj.agents.lmp import strip_benign_imports
+    from capmj.agents.lmp.codeprep import strip_benign_imports
 
     src = ("import numpy as np\nfrom env_utils import get_obj_pos\nimport os\n"
            "from plan_utils import secret_tool\nx = 1\n")

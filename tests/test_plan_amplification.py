@@ -25,7 +25,7 @@ from llm_stub_server import StubLLMServer, prompt_text
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.llm_agent import LLMAgent
 from capmj.agents.llm_options import LLMAgentOptions
-from capmj.agents.lmp import DEFAULT_EPISODE_MAX_HELPER_CALLS, LMPSession
+from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS, LMPSession
 from capmj.agents.sandbox import SandboxBudget, check_code, run_code
 from capmj.agents.sandbox.sizes import array_elements, broadcast_elements, capped_text, preview, text_length
 from capmj.bench.failures import classify

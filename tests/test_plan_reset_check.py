@@ -16,7 +16,7 @@ import pytest
 
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import Budget, EpisodeContext
-from capmj.agents.lmp import LMPSession
+from capmj.agents.lmp.session import LMPSession
 from capmj.agents.sandbox import run_code
 from capmj.errors import BudgetExceeded, PlanError
 from capmj.runner import run_episode

@@ -15,7 +15,7 @@ import os
 import numpy as np
 import pytest
 
-from capmj.agents.lmp import META, QUESTION, load_prompt, load_system_prompt
+from capmj.agents.prompt_files import META, QUESTION, load_prompt, load_system_prompt
 from capmj.agents.sandbox import run_code
 from prompt_examples import (ALL_LMPS, HELPER_LMPS, ExampleLLM, build_context, examples, objects_line,
                              query_of, scene_specs, session_for)

@@ -41,9 +41,9 @@ from typing import Any
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.confidence import assess
-from capmj.agents.llm_meter import LLMMeter, check_limits
+from capmj.agents.lmp.meter import LLMMeter, check_limits
 from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
-from capmj.agents.lmp import HelperCallCap, LMPCall, LMPSession, find_llm_error
+from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
 from capmj.agents.plan_check import plan_check

@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from capmj.agents.choices import ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
-from capmj.agents.llm_meter import Price, check_limit, parse_price
-from capmj.agents.lmp import DEFAULT_EPISODE_MAX_HELPER_CALLS
+from capmj.agents.lmp.meter import Price, check_limit, parse_price
+from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.agents.loop_policy import check_policy
 from capmj.agents.planner import DEFAULT_PLAN_BUDGET
 from capmj.agents.sandbox import SandboxBudget
@@ -63,7 +63,7 @@ class LLMAgentOptions:
     """How the LLM agent's loop runs (everything but the LLM client's own settings).
 
     Values are checked and normalised when the record is built (``attempts="2"`` becomes 2, a
-    ``price`` string ``"IN,OUT"`` a :class:`~capmj.agents.llm_meter.Price`); a bad one raises
+    ``price`` string ``"IN,OUT"`` a :class:`~capmj.agents.lmp.meter.Price`); a bad one raises
     ``ConfigError``.  Whether ``episode_max_cost_usd`` is usable depends on the model's price, so
     the agent checks that against its ``LLMConfig``."""
 
@@ -88,7 +88,7 @@ class LLMAgentOptions:
     episode_max_tokens: int | None = None
     episode_max_cost_usd: float | None = None
     episode_max_helper_calls: int | None = DEFAULT_EPISODE_MAX_HELPER_CALLS
-    """Helper LMP calls the episode's code may make (:class:`~capmj.agents.lmp.HelperCallCap`;
+    """Helper LMP calls the episode's code may make (:class:`~capmj.agents.lmp.session.HelperCallCap`;
     None: no cap).  Over it the episode ends as over its LLM budget (failure ``budget``)."""
     price: Price | None = None
     """The declared price (USD per million input, output tokens); a string ``"IN,OUT"`` is parsed."""

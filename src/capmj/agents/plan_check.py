@@ -26,7 +26,7 @@ from collections.abc import Callable
 from typing import Any
 
 from capmj.agents.base import JUDGE_SETTLE_STEPS
-from capmj.agents.lmp import LMPSession
+from capmj.agents.lmp.session import LMPSession
 from capmj.agents.reporter import TextReporter
 
 __all__ = ["plan_check"]

@@ -24,7 +24,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from capmj.agents.lmp import LMPCall, LMPSession, object_names
+from capmj.agents.lmp.session import LMPCall, LMPSession
+from capmj.agents.prompt_files import object_names
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.errors import PlanError, describe
 from capmj.llm.provider import derived_seed

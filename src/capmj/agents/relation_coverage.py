@@ -21,7 +21,7 @@ from __future__ import annotations
 import ast
 import re
 
-from capmj.agents.codeprep import named_calls
+from capmj.agents.lmp.codeprep import named_calls
 
 __all__ = ["COVERAGE", "uncovered"]
 

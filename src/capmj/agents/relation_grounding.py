@@ -32,7 +32,7 @@ import re
 from collections.abc import Iterable
 from typing import Any
 
-from capmj.agents.codeprep import named_calls
+from capmj.agents.lmp.codeprep import named_calls
 
 __all__ = ["goal_numbers", "ungrounded"]
 

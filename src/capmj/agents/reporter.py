@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from capmj.agents.choices import REPORTER_PROMPTS, REPORTERS
-from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.reporter_env import PREBOUND, reporter_env
 from capmj.agents.reporter_goalcheck import GoalCheckReporter

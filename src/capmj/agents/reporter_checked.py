@@ -29,7 +29,8 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from capmj.agents.lmp import LMPSession, prompts_dir
+from capmj.agents.lmp.session import LMPSession
+from capmj.agents.prompt_files import prompts_dir
 from capmj.agents.verdict import Report, ask_verdict
 from capmj.agents.scene_facts import facts_text, scene_facts, state_from_api
 from capmj.errors import ConfigError

@@ -40,7 +40,7 @@ import dataclasses
 from typing import Any
 
 from capmj.agents.check_reads import blind_problem
-from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.reporter_records import RecordsReporter
 from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.verdict import CheckRun, rerun_check

@@ -43,7 +43,7 @@ import dataclasses
 import re
 from typing import Any
 
-from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.reporter_checked import CheckedReporter
 from capmj.agents.scene_facts import state_from_api
 from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of

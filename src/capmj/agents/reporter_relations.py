@@ -48,8 +48,8 @@ import ast
 import dataclasses
 from typing import Any
 
-from capmj.agents.codeprep import named_calls, undefined_calls
-from capmj.agents.lmp import LMPCall, LMPSession
+from capmj.agents.lmp.codeprep import named_calls, undefined_calls
+from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
 from capmj.agents.relation_coverage import uncovered
 from capmj.agents.relation_grounding import ungrounded

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from capmj.agents.base import JUDGE_SETTLE_STEPS
-from capmj.agents.lmp import LMPSession, load_system_prompt, prompts_dir
+from capmj.agents.lmp.session import LMPSession
+from capmj.agents.prompt_files import load_system_prompt, prompts_dir
 from capmj.agents.verdict import Report, ask_verdict, direct_verdict
 from capmj.errors import CapmjError, ConfigError, describe
 

@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from capmj.agents.lmp import LMPCall, LMPSession, prompts_dir
+from capmj.agents.lmp.session import LMPCall, LMPSession
+from capmj.agents.prompt_files import prompts_dir
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import ConfigError, PlanError, describe
 

@@ -1,7 +1,7 @@
 """LLM usage and cost of episodes, per task and overall, and the run-level budget.
 
 Per episode the LLM agent records its nominal usage in ``llm.spend`` (see
-:mod:`capmj.agents.llm_meter`): tokens, and a cost in USD that is ``None`` when the model's price
+:mod:`capmj.agents.lmp.meter`): tokens, and a cost in USD that is ``None`` when the model's price
 is unknown.  Totals add up tokens always, and cost only while every episode's cost is known — one
 unknown price makes the total unknown (shown as "unknown", never as 0).  Records without
 ``llm.spend`` (older runs) have known tokens but unknown cost.
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable, Mapping, Sequence
 
 from capmj.agents.factory import agent_setting
-from capmj.agents.llm_meter import price_source
+from capmj.agents.lmp.meter import price_source
 from capmj.errors import ConfigError
 from capmj.records import Episode
 

@@ -1,7 +1,7 @@
 """Per-episode LLM call transcripts next to ``episodes.jsonl``.
 
 Every LLM call of an episode (messages sent, completion received, tokens, cost, cache hit; see
-:mod:`capmj.agents.llm_meter`) is kept in ``DIR/transcripts/<task>/<seed>-<agent>[-<model>].jsonl``,
+:mod:`capmj.agents.lmp.meter`) is kept in ``DIR/transcripts/<task>/<seed>-<agent>[-<model>].jsonl``,
 one call per line, written atomically by the grid's parent process; the episode's record names
 the file in ``transcript`` and keeps only the call count.  Why a side file: the messages of one
 episode are tens of kilobytes (hundreds with VLM images) and would make ``episodes.jsonl``

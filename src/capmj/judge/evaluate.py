@@ -21,8 +21,8 @@ from typing import Any
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.llm_options import DEFAULT_LMP_BUDGET
-from capmj.agents.llm_meter import LLMMeter, parse_price
-from capmj.agents.lmp import LMPSession, find_llm_error
+from capmj.agents.lmp.meter import LLMMeter, parse_price
+from capmj.agents.lmp.session import LMPSession, find_llm_error
 from capmj.agents.confidence import assess
 from capmj.agents.choices import REPORTER_PROMPTS
 from capmj.agents.reporter import make_reporter

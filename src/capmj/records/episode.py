@@ -54,7 +54,7 @@ class Episode:
 
     ``llm`` is None for agents without an LLM (written ``{}``), ``drift`` None when it could not be
     measured (written ``{}``); ``final_poses`` maps object name -> ``[x, y, z, qw, qx, qy, qz]``;
-    ``calls`` are the episode's LLM calls (messages and answer, :mod:`capmj.agents.llm_meter`).
+    ``calls`` are the episode's LLM calls (messages and answer, :mod:`capmj.agents.lmp.meter`).
     ``error_type`` is the class of what failed (:func:`capmj.errors.error_facts`), None without
     an error; ``error_status`` the failed primitive's status for a ``MotionFailed``.
     ``perception`` is the perception error of an episode whose planner API read the cameras

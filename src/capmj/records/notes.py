@@ -35,7 +35,7 @@ class SpendLimits:
 
 @dataclass(frozen=True)
 class Spend:
-    """Nominal LLM usage of one episode (:meth:`capmj.agents.llm_meter.LLMMeter.summary`):
+    """Nominal LLM usage of one episode (:meth:`capmj.agents.lmp.meter.LLMMeter.summary`):
     ``cost_usd`` is None when the model's price is unknown."""
 
     calls: int = 0

@@ -93,7 +93,7 @@ FORMAT_FIELD_RULE = ("format fields may name arguments only ({}, {0}, {name}); u
 def bound_names(tree: ast.AST) -> set[str]:
     """Every name ``tree`` binds anywhere (assignments, arguments, defs, except/import names).
 
-    Shared with the code preparation of the LLM agent (``capmj.agents.codeprep``), which needs the
+    Shared with the code preparation of the LLM agent (``capmj.agents.lmp.codeprep``), which needs the
     same notion of "defined by this code" to find functions the code calls but never defines.
     """
     names: set[str] = set()

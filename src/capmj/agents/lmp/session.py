@@ -7,12 +7,11 @@ planner sets nothing, it acts).  One :class:`LMPSession` serves one attempt of o
 owns the API environment, numbers and records every call, and synthesises functions that code
 calls but nobody defined (``parse_function``), recursively up to ``max_fn_depth``.  The static
 code preparation it relies on (benign-import removal, undefined-call scan) is in
-:mod:`capmj.agents.codeprep`.
+:mod:`capmj.agents.lmp.codeprep`.
 
 Everything an LMP does goes to the recorder under ``llm/attempt{k}/{lmp}/{n}/`` (``prompt``,
 ``completion``, ``code``, ``result`` or ``error``) and to the in-memory :attr:`LMPSession.transcript`.
 
-Prompt-file and code-preparation names stay importable from here, as before they moved out.
 """
 
 from __future__ import annotations
@@ -25,35 +24,16 @@ from typing import Any
 
 import numpy as np
 
-from capmj.agents.codeprep import (RESERVED, SANDBOX_GLOBALS, bound_names, function_defs,
-                                   strip_benign_imports, undefined_calls)
-from capmj.agents.prompt_files import (META, QUESTION, Example, PromptFile, load_prompt,
-                                       load_system_prompt, object_names, prompts_dir)
+from capmj.agents.lmp.codeprep import RESERVED, bound_names, function_defs, strip_benign_imports, undefined_calls
+from capmj.agents.prompt_files import PromptFile, load_prompt, load_system_prompt, object_names, prompts_dir
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.agents.sandbox.located import WRITTEN_END, WRITTEN_START, located_error
 from capmj.agents.sandbox.sizes import preview, text_length
 from capmj.errors import HelperCallsExceeded, LLMError, PlanError, TextBudgetExceeded, describe
 from capmj.record import NullRecorder, Recorder
 
-__all__ = [
-    "ACTION_FUNCTIONS",
-    "DEFAULT_EPISODE_MAX_HELPER_CALLS",
-    "Example",
-    "HelperCallCap",
-    "LMPSession",
-    "META",
-    "PromptFile",
-    "QUESTION",
-    "SANDBOX_GLOBALS",
-    "find_llm_error",
-    "load_prompt",
-    "load_system_prompt",
-    "messages_text",
-    "object_names",
-    "prompts_dir",
-    "strip_benign_imports",
-    "undefined_calls",
-]
+__all__ = ["ACTION_FUNCTIONS", "DEFAULT_EPISODE_MAX_HELPER_CALLS", "HelperCallCap", "LMPCall", "LMPSession",
+           "find_llm_error", "messages_text"]
 
 ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order", "reset"})
 """API functions that change the scene (the robot moves, or ``reset`` restores the initial scene):

@@ -3,7 +3,7 @@
 Completions are not run as written: import lines that merely echo the prompt header are
 dropped (also star imports of provided modules, ``from shapely.geometry import *``), and calls
 of functions nobody defined are found so that ``parse_function`` can write them (see
-:class:`capmj.agents.lmp.LMPSession`) -- except names that belong to the API, the LMPs, the
+:class:`capmj.agents.lmp.session.LMPSession`) -- except names that belong to the API, the LMPs, the
 sandbox or the episode (:data:`RESERVED`), which are never invented: calling one where it is not
 available is a PlanError saying why and what exists.  All of that is pure AST work on source text,
 with no LLM or environment involved, so it lives here and can be tested on its own.  Everything
