@@ -67,7 +67,7 @@ from capmj.agents.base import EpisodeContext
 from capmj.agents.lmp.codeprep import RESERVED, strip_benign_imports, undefined_calls
 from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import object_names
-from capmj.agents.reporter_env import reporter_env
+from capmj.agents.report.text_env import reporter_env
 from capmj.agents.sandbox import PROVIDED_NAMES, SandboxBudget, run_code
 from capmj.errors import PlanError, PortingDifference, UnknownObjectError, error_name
 from capmj.sim.objects import KINDS, ObjectSpec, resting_z

@@ -13,7 +13,7 @@ import pytest
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
 from capmj.agents.lmp.session import LMPSession
-from capmj.agents.reporter_env import reporter_env
+from capmj.agents.report.text_env import reporter_env
 from capmj.agents.sandbox import run_code
 from capmj.errors import PlanError, PortingDifference
 from capmj.sim.objects import ObjectSpec

@@ -1,4 +1,4 @@
-"""``capmj.agents.check_reads``: which model-written checks cannot tell one scene from another.
+"""``capmj.agents.report.check_reads``: which model-written checks cannot tell one scene from another.
 
 The records are those of a real settled scene (the matching-bowl task's solved state, seed 10001,
 from the judge set); the checks are written as a small model writes them.
@@ -10,8 +10,8 @@ import ast
 
 import pytest
 
-from capmj.agents.check_reads import MEASURED_KEYS, blind_problem, keys_read, unmatched_comparisons
-from capmj.agents.scene_records import RECORD_KEYS, records
+from capmj.agents.report.check_reads import MEASURED_KEYS, blind_problem, keys_read, unmatched_comparisons
+from capmj.agents.report.scene_records import RECORD_KEYS, records
 from capmj.judge.cases import Stage
 from capmj.judge.judgeset import build_cases
 from capmj.tasks.registry import get_task

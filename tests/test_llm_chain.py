@@ -19,7 +19,7 @@ import pytest
 
 from capmj.agents.llm_agent import LLMAgent
 from capmj.agents.llm_options import LLMAgentOptions
-from capmj.agents.reporter import parse_verdict
+from capmj.agents.report.verdict import parse_verdict
 from capmj.agents.sandbox import SandboxBudget
 from capmj.llm import LLMConfig
 from capmj.runner import run_episode

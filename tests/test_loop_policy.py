@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from capmj.agents.confidence import Assessment
+from capmj.agents.report.confidence import Assessment
 from capmj.agents.loop_policy import Outcome, decide
 from capmj.errors import ConfigError
 from capmj.records import LOOP_RULES
@@ -214,7 +214,7 @@ def test_bad_policies_are_refused_and_the_options_reach_the_agent() -> None:
     from capmj.agents.factory import make_agent
     from capmj.agents.llm_options import LLMAgentOptions
     from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
-    from capmj.agents.reporter import make_reporter
+    from capmj.agents.report.registry import make_reporter
     from capmj.bench.cli import build_parser
 
     with pytest.raises(ConfigError, match="thesis, careful"):

@@ -165,7 +165,7 @@ def test_get_bbox_of_a_turned_zone_and_of_a_bowl(api):
 def test_reporter_in_zone_is_the_tasks_rule():
     """The text reporter's pre-bound in_zone applies predicates.in_zone's rule (yaw and scale of the
     zone honoured), not an axis-aligned 0.06 m box: one meaning of "in the zone"."""
-    from capmj.agents.reporter_env import reporter_env
+    from capmj.agents.report.text_env import reporter_env
 
     objs = [ObjectSpec(1, "zone", "green", (0.5, 0.0, 0.0005), yaw=math.pi / 4),
             ObjectSpec(2, "zone", "red", (0.5, 0.3, 0.0005), scale=2.0),

@@ -150,7 +150,7 @@ def test_parse_completion_example_judges_truth(lmp: str, example, drop_first_lin
     """The text reporter's examples run through the real reporter (pre-bound names, sandbox) and
     judge their scene right; with the example's first code line dropped (what a small model did)
     they still reach a verdict."""
-    from capmj.agents.reporter import TextReporter
+    from capmj.agents.report.text import TextReporter
 
     ctx = build_context(example)
     llm = ExampleLLM()

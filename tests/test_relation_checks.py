@@ -1,4 +1,4 @@
-"""The pre-bound relation checks of the ``relations`` reporter (:mod:`capmj.agents.relation_checks`),
+"""The pre-bound relation checks of the ``relations`` reporter (:mod:`capmj.agents.report.relations.checks`),
 on hand-built records: each relation holds where it should, fails where it should, and names the
 objects that break it; bad arguments raise PlanError naming the valid choices."""
 
@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from capmj.agents.relation_checks import CHECKS, NAMES, relation_env
+from capmj.agents.report.relations.checks import CHECKS, NAMES, relation_env
 from capmj.agents.sandbox import run_code
 from capmj.errors import PlanError
 
@@ -198,7 +198,7 @@ def test_the_impossible_sentence_does_not_vary_with_string_hashing() -> None:
 
     script = ("import sys; sys.path.insert(0, 'tests')\n"
               "from test_relation_checks import place, tower\n"
-              "from capmj.agents.relation_checks import relation_env\n"
+              "from capmj.agents.report.relations.checks import relation_env\n"
               "from capmj.agents.sandbox import run_code\n"
               "env, f = relation_env([place(1, 'zone', 'green'), place(4, 'bowl', 'red'), *tower(list('abcdefgh'))])\n"
               "run_code(\"require_inside(blocks(), zone('green'))\\nrequire_inside(blocks(), bowl('red'))\", env)\n"

@@ -17,9 +17,9 @@ import pytest
 from llm_stub_server import StubLLMServer, prompt_text
 from module_loader import ROOT
 
-from capmj.agents.confidence import LOW_CONFIDENCE, assess
-from capmj.agents.reporter import Report
-from capmj.agents.scene_facts import facts_text, resolve_name, scene_facts
+from capmj.agents.report.confidence import LOW_CONFIDENCE, assess
+from capmj.agents.report.verdict import Report
+from capmj.agents.report.scene_facts import facts_text, resolve_name, scene_facts
 from capmj.bench.cli import main
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.judge.judgeset import build_cases

@@ -14,9 +14,9 @@ from typing import Any
 
 from llm_stub_server import StubLLMServer, prompt_text
 
-from capmj.agents.reporter import make_reporter
-from capmj.agents.reporter_goalcheck import HOLDS_AT_START, GoalCheckReporter
-from capmj.agents.scene_records import INVENTORY_KEYS
+from capmj.agents.report.registry import make_reporter
+from capmj.agents.report.goalcheck import HOLDS_AT_START, GoalCheckReporter
+from capmj.agents.report.scene_records import INVENTORY_KEYS
 from capmj.bench.cli import main
 
 SEED = 10001

@@ -19,10 +19,10 @@ from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.agents.choices import REPORTER_PROMPTS
 from capmj.agents.prompt_files import load_prompt
-from capmj.agents.reporter import make_reporter
-from capmj.agents.reporter_records import PROMPT, REPAIR_TEMPERATURE, RecordsReporter
-from capmj.agents.scene_facts import area_of
-from capmj.agents.scene_records import RECORD_KEYS, records, records_text
+from capmj.agents.report.registry import make_reporter
+from capmj.agents.report.records import PROMPT, REPAIR_TEMPERATURE, RecordsReporter
+from capmj.agents.report.scene_facts import area_of
+from capmj.agents.report.scene_records import RECORD_KEYS, records, records_text
 from capmj.bench.cli import main
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.judge.judgeset import build_cases

@@ -14,9 +14,9 @@ from typing import Any
 from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.agents.prompt_files import load_prompt
-from capmj.agents.relation_checks import CHECKS
-from capmj.agents.reporter import make_reporter
-from capmj.agents.reporter_relations import BLIND, HOLDS_AT_START, IMPOSSIBLE, RelationsReporter
+from capmj.agents.report.relations.checks import CHECKS
+from capmj.agents.report.registry import make_reporter
+from capmj.agents.report.relations.reporter import BLIND, HOLDS_AT_START, IMPOSSIBLE, RelationsReporter
 from capmj.bench.cli import main
 
 SEED = 10001

@@ -36,20 +36,20 @@ from __future__ import annotations
 
 from dataclasses import replace
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
-from capmj.agents.confidence import assess
+from capmj.agents.report.confidence import assess
 from capmj.agents.lmp.meter import LLMMeter, check_limits
 from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
-from capmj.agents.plan_check import plan_check
+from capmj.agents.report.plan_check import plan_check
 from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
-from capmj.agents.reporter import make_reporter
-from capmj.agents.verdict import Report
+from capmj.agents.report.registry import Reporter, make_reporter
+from capmj.agents.report.verdict import Report
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig
 from capmj.records import ATTEMPT_FIELDS, AttemptRecord, LLMNotes, Spend
@@ -210,7 +210,7 @@ class LLMAgent:
                         scene=self._scene_summary(ctx), from_initial=from_initial, reset=reset)
 
     def _attempt(self, ctx: EpisodeContext, client: LLMClient, transcript: list[LMPCall], k: int, goal: str,
-                 reporter: Any, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback],
+                 reporter: Reporter | None, feedback: Feedback | None, plans: list[str | None], feedbacks: list[Feedback],
                  *, reset: bool) -> tuple[AttemptRecord, BaseException | None, Report | None, PlanOutcome]:
         o = self.options
         api = make_api(ctx, o.perception)
@@ -244,8 +244,8 @@ class LLMAgent:
                 llm_error = find_llm_error(exc)
                 if llm_error is not None:
                     error = llm_error
-                else:
-                    report = Report(reporter.mode, None, "", f"reporter failed: {describe(exc)}",
+                else:  # with no reporter only if settling raised: then an AttributeError, as ever
+                    report = Report(cast(Reporter, reporter).mode, None, "", f"reporter failed: {describe(exc)}",
                                     "unknown", (), (f"reporter failed: {describe(exc)}",))
             predicate = self._predicate(ctx)  # the same state the reporter judged
         replanned = k > 1 and outcome.key is not None

@@ -14,7 +14,7 @@ a. **judge before resetting.** A plan that raised *after acting* is judged on th
 b. **re-plan from here.** A high-confidence "not achieved" naming some, not all, of the movable
    objects re-plans from the current state without a reset (``partial_replan``), told which
    objects are wrong.  Resetting threw away the objects the plan had placed right.
-c. **stop on low confidence.** A verdict :func:`capmj.agents.confidence.assess` finds
+c. **stop on low confidence.** A verdict :func:`capmj.agents.report.confidence.assess` finds
    low-confidence (unknown, "not achieved" naming no real movable object, self-contradicting)
    keeps the state instead of re-planning from scratch (``low_confidence_stop``): such a verdict
    is no evidence that the state is wrong, and an unfounded "no" was what undid reached goals
@@ -35,7 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from capmj.agents.choices import LOOP_POLICIES
-from capmj.agents.confidence import Assessment
+from capmj.agents.report.confidence import Assessment
 from capmj.errors import ConfigError
 from capmj.records import LOOP_RULES
 

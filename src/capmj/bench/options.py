@@ -16,7 +16,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
+from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS, reporter_prompt_help
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
@@ -71,11 +71,7 @@ AGENT_FLAGS: tuple[Flag, ...] = (
     Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: thesis (default: reset and re-plan "
          "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
          "on a low-confidence one; docs/llm.md)", choices=LOOP_POLICIES),
-    Flag(("--reporter-prompt",), "reporter_prompt", "the text reporter's prompt: thesis (default: checking code), "
-         "checked (capmj binds the scene facts as text), records (as records for checking code), goalcheck (a "
-         "check written from the goal and the objects, run on the measured records) or relations (the goal as calls "
-         "of pre-bound relation checks; docs/judge.md)",
-         choices=REPORTER_PROMPTS),
+    Flag(("--reporter-prompt",), "reporter_prompt", reporter_prompt_help(), choices=REPORTER_PROMPTS),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "

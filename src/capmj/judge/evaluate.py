@@ -23,9 +23,9 @@ from capmj.agents.base import EpisodeContext
 from capmj.agents.llm_options import DEFAULT_LMP_BUDGET
 from capmj.agents.lmp.meter import LLMMeter, parse_price
 from capmj.agents.lmp.session import LMPSession, find_llm_error
-from capmj.agents.confidence import assess
+from capmj.agents.report.confidence import assess
 from capmj.agents.choices import REPORTER_PROMPTS
-from capmj.agents.reporter import make_reporter
+from capmj.agents.report.registry import Reporter, make_reporter
 from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.llm import LLMClient, LLMConfig
@@ -156,7 +156,7 @@ class Judge:
         _frame(rec, stage)
         return rec
 
-    def _ask(self, ctx: EpisodeContext, reporter: Any, case: JudgeCase, rec: dict[str, Any],
+    def _ask(self, ctx: EpisodeContext, reporter: Reporter, case: JudgeCase, rec: dict[str, Any],
              transcript: list[Any]) -> None:
         assert self.client is not None
         client = self.client

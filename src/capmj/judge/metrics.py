@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-from capmj.agents.verdict import SOURCES
+from capmj.agents.report.verdict import SOURCES
 from capmj.bench.results import wilson
 
 __all__ = ["RECORD_FIELDS", "confusion", "contrast_counts", "group_metrics", "metrics"]

@@ -27,7 +27,7 @@ LOOP_RULES: dict[str, str] = {
                             "achieved: stop there (error recorded, state kept)",
     "partial_replan": "careful: not achieved, the reporter named some (not all) movable objects wrong: "
                       "re-plan from the current state, no reset",
-    "low_confidence_stop": "careful: the verdict is low-confidence (capmj.agents.confidence): stop, keep the state",
+    "low_confidence_stop": "careful: the verdict is low-confidence (capmj.agents.report.confidence): stop, keep the state",
     "llm_error": "the LLM provider failed: stop",
     "llm_budget": "the episode's LLM budget is used up: stop",
 }
@@ -64,8 +64,8 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "predicate": "the task's success predicate on the state the reporter judged (None if it failed)",
     "predicate_progress": "the predicate's progress in [0, 1] on that state",
     "on_unknown": "the policy applied to an unknown verdict ('replan'/'stop'), else None",
-    "confidence": "the verdict's confidence, 'high' or 'low' (capmj.agents.confidence.assess); None without a reporter",
-    "low_confidence": "why it is low (a key of capmj.agents.confidence.LOW_CONFIDENCE), else None",
+    "confidence": "the verdict's confidence, 'high' or 'low' (capmj.agents.report.confidence.assess); None without a reporter",
+    "low_confidence": "why it is low (a key of capmj.agents.report.confidence.LOW_CONFIDENCE), else None",
     "rule": "which loop rule fired after this attempt (a key of LOOP_RULES)",
     "report": "what the next attempt is told (verdict/error and object positions)",
     "primitives": "pick-and-place calls", "api_calls": "planner API calls",

@@ -4,7 +4,7 @@ the error that says what was meant when none fits.
 Plan code writes names as small models write them ("brown bowl", "movable_blue_block_with_obj_id_3",
 "yellow block with obj_id 4"); :func:`lookup` accepts exactly the readings that can mean one object
 and nothing else, so a name is never guessed.  Shared by the planner API (:mod:`capmj.agents.api.planner_api`)
-and the reporter's scene (:mod:`capmj.agents.reporter_env`), so both read a name the same way.
+and the reporter's scene (:mod:`capmj.agents.report.text_env`), so both read a name the same way.
 """
 
 from __future__ import annotations

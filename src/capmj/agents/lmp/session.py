@@ -156,7 +156,7 @@ class LMPSession:
     """The episode's count of helper LMP calls (the agent shares one across its attempts)."""
     check: Callable[..., Any] | None = None
     """The plan's ``parse_completion(goal, context=None)``: the text reporter over the current scene
-    (:func:`capmj.agents.plan_check.plan_check`), bound by the agent that has one; None, plan code
+    (:func:`capmj.agents.report.plan_check.plan_check`), bound by the agent that has one; None, plan code
     cannot call it."""
     _counters: dict[str, int] = field(default_factory=dict)
     _system: str | None = None

@@ -5,14 +5,14 @@ parse_completion('<goal>', f'object_positions = {get_obj_pos_dict()}'):`` then `
 a second try.  There ``parse_completion`` was one LMP bound for every program (its
 ``setup_LMP``), returning the ``judge`` its checking code set.  :func:`plan_check` gives a plan
 the same: it lets the world come to rest, as before any verdict, runs capmj's text reporter
-(:class:`~capmj.agents.reporter.TextReporter`: checking code, one repair, the direct verdict) on
+(:class:`~capmj.agents.report.text.TextReporter`: checking code, one repair, the direct verdict) on
 the scene as it is now, and returns the verdict as a bool.
 
 Why these choices:
 
 * ``context`` is accepted and not needed.  The original passed the poses the plan had just read;
   the reporter's code reads the same live poses (``object_positions`` is pre-bound,
-  :mod:`capmj.agents.reporter_env`), so nothing the plan could pass is newer.
+  :mod:`capmj.agents.report.text_env`), so nothing the plan could pass is newer.
 * An unknown verdict (no answer gave a bool) returns False: the goal is not known to be achieved,
   so the plan's retry branch runs, as on a False.
 * Every LMP call it makes is in the session's transcript and the episode's log like the
@@ -27,7 +27,7 @@ from typing import Any
 
 from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp.session import LMPSession
-from capmj.agents.reporter import TextReporter
+from capmj.agents.report.text import TextReporter
 
 __all__ = ["plan_check"]
 

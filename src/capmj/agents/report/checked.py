@@ -1,21 +1,21 @@
 """The ``checked`` text-reporter prompt: capmj binds the scene facts, the model only compares.
 
 ``--reporter-prompt thesis`` (the default) is the thesis's text reporter,
-:class:`~capmj.agents.reporter.TextReporter`: the ``parse_completion`` LMP writes checking code that
+:class:`~capmj.agents.report.text.TextReporter`: the ``parse_completion`` LMP writes checking code that
 must itself derive positions, containment and stacking.  ``--reporter-prompt checked`` is
 :class:`CheckedReporter`: one request with ``prompts/reporter_checked.txt``, which lists the facts
-:mod:`capmj.agents.scene_facts` measured with the tasks' own rules (per object: centre, quarter of
+:mod:`capmj.agents.report.scene_facts` measured with the tasks' own rules (per object: centre, quarter of
 the table, what it rests on, the zone or bowl it is in, tilt) and asks for ``judge``, ``reason``
 and ``wrong`` — the full names of the objects that break the goal.  Why: the shared 1.5B model's
 checking code agreed with the predicate on 43-55 % of attempts; deriving the facts was where it
 failed, and a fact list (~150 characters per object) is also shorter than the 5.3 kB of
 ``parse_completion``'s examples.
 
-The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.verdict.parse_verdict`).
+The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.report.verdict.parse_verdict`).
 An answer without a verdict gets one repair request in the same conversation; still none: unknown.
 Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — no ``direct`` fallback,
 since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
-real objects?) is :func:`capmj.agents.confidence.assess`, applied to either prompt's verdict.
+real objects?) is :func:`capmj.agents.report.confidence.assess`, applied to either prompt's verdict.
 
 A verdict whose reason is the prompt file's own example word for word is marked ``doubt="copies_example"`` (low
 confidence, ``copies_example``).  Why: 22 of the shared 1.5B model's 39 answers on the judge's
@@ -31,8 +31,8 @@ from typing import Any
 
 from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import prompts_dir
-from capmj.agents.verdict import Report, ask_verdict
-from capmj.agents.scene_facts import facts_text, scene_facts, state_from_api
+from capmj.agents.report.verdict import Report, ask_verdict
+from capmj.agents.report.scene_facts import facts_text, scene_facts, state_from_api
 from capmj.errors import ConfigError
 
 __all__ = ["PROMPT_FILE", "CheckedReporter"]

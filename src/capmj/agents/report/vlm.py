@@ -2,7 +2,7 @@
 FRONT camera plus the final depth as a *visible* colour map (the original converted metric depth
 to 8-bit integers, i.e. an almost black image) and answers with a code block setting ``judge``.
 The verdict is read by parsing that code and literal-evaluating the assignment
-(:func:`capmj.agents.verdict.parse_verdict`; the original searched the answer for the substring
+(:func:`capmj.agents.report.verdict.parse_verdict`; the original searched the answer for the substring
 "True", so "not True" counted as success).  No renderer, or no verdict after one repair: the
 direct verdict takes over.
 """
@@ -17,7 +17,7 @@ import numpy as np
 from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import load_system_prompt, prompts_dir
-from capmj.agents.verdict import Report, ask_verdict, direct_verdict
+from capmj.agents.report.verdict import Report, ask_verdict, direct_verdict
 from capmj.errors import CapmjError, ConfigError, describe
 
 

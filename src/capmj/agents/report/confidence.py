@@ -4,7 +4,7 @@ A verdict is *high-confidence* when it is consistent in itself and with the scen
 
 * ``True`` naming no wrong object, or
 * ``False`` naming at least one real object the robot can move (resolved by
-  :func:`capmj.agents.scene_facts.resolve_name`).
+  :func:`capmj.agents.report.scene_facts.resolve_name`).
 
 Otherwise it is *low-confidence*, for one of the reasons of :data:`LOW_CONFIDENCE`.  Why these
 rules: a "not achieved" that cannot say which object is wrong gives a re-plan nothing to fix, and a
@@ -17,9 +17,9 @@ it is the ``records`` prompt's fallback to the ``checked`` question, whose verdi
 movable object agreed with the predicate on 53-56 % of the judge set's states with the shared 1.5B
 model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; acting on it would
 re-plan achieved states at chance.  A verdict whose reason copies the prompt's own example
-(``Report.doubt``, set by :class:`~capmj.agents.reporter_checked.CheckedReporter`) is no evidence
+(``Report.doubt``, set by :class:`~capmj.agents.report.checked.CheckedReporter`) is no evidence
 about the scene either, nor is a check that says "achieved" of the scene the robot started from
-(:class:`~capmj.agents.reporter_goalcheck.GoalCheckReporter`): no task's goal holds there, nor is a
+(:class:`~capmj.agents.report.goalcheck.GoalCheckReporter`): no task's goal holds there, nor is a
 check whose text cannot depend on the scene (``blind_check``).  The ``careful`` loop
 (:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
@@ -30,8 +30,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from capmj.agents.scene_facts import resolve_name
-from capmj.agents.verdict import Report
+from capmj.agents.report.scene_facts import resolve_name
+from capmj.agents.report.verdict import Report
 from capmj.sim.objects import ObjectSpec
 
 __all__ = ["CONFIDENCE_LEVELS", "LOW_CONFIDENCE", "Assessment", "assess"]

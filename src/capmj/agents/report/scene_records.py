@@ -1,6 +1,6 @@
 """The measured scene as Python records, for the ``records`` reporter's checking code.
 
-:mod:`capmj.agents.scene_facts` measures each object with the tasks' own rules; this module turns
+:mod:`capmj.agents.report.scene_facts` measures each object with the tasks' own rules; this module turns
 those facts into one plain ``dict`` per object, the shape a small code model reads and filters
 without help (the shared 1.5B model, asked for a verdict over facts shown as text, started writing
 ``facts[1]['centre'] != ...`` of its own accord).  The records are built fresh for every run of
@@ -23,7 +23,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from capmj.agents.scene_facts import ObjectFacts, area_of, scene_facts
+from capmj.agents.report.scene_facts import ObjectFacts, area_of, scene_facts
 from capmj.sim.state import SceneState
 from capmj.tasks import predicates as P
 

@@ -12,7 +12,7 @@ So ``goalcheck`` asks for what the check is really made of, the goal and the obj
 result out of the question:
 
 * the question lists only the keys acting cannot change (``name``, ``kind``, ``color``, ``size``:
-  :data:`capmj.agents.scene_records.INVENTORY_KEYS`) under the ``records`` prompt's documentation of
+  :data:`capmj.agents.report.scene_records.INVENTORY_KEYS`) under the ``records`` prompt's documentation of
   every key (``prompts/reporter_records.py``, the same file: one description of the records);
 * the check runs on the full records of the settled final scene, which gives the verdict;
 * it runs again on the records of the start scene, where no task's goal holds (checked for the 20
@@ -21,7 +21,7 @@ result out of the question:
   verdict is kept but doubted (``holds_at_start``, low-confidence: the ``careful`` loop does not act
   on it).  A check that *fails* on the start scene is not held against it (``[...][0]`` of the blocks
   in a zone that is empty at the start).
-* before that, its code is read (:func:`capmj.agents.check_reads.blind_problem`): a check that
+* before that, its code is read (:func:`capmj.agents.report.check_reads.blind_problem`): a check that
   reads none of the keys acting changes, or compares one with a value no record can have
   (``b["inside"] != "zone"``), gives one verdict whatever the scene.  The repair request names the
   fault and the values the key has; still blind after it, the verdict is kept but doubted
@@ -31,7 +31,7 @@ A consequence that makes the judge affordable: every state of one episode gets t
 so with ``--llm-cache`` the model is asked once per (task, seed), not once per state.
 
 The start scene's records are read from the simulator's initial state, as ``start_area`` is
-(:meth:`~capmj.agents.reporter_records.RecordsReporter.start` keeps both).
+(:meth:`~capmj.agents.report.records.RecordsReporter.start` keeps both).
 """
 
 from __future__ import annotations
@@ -39,11 +39,11 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from capmj.agents.check_reads import blind_problem
+from capmj.agents.report.check_reads import blind_problem
 from capmj.agents.lmp.session import LMPCall, LMPSession
-from capmj.agents.reporter_records import RecordsReporter
-from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
-from capmj.agents.verdict import CheckRun, rerun_check
+from capmj.agents.report.records import RecordsReporter
+from capmj.agents.report.scene_records import INVENTORY_KEYS, records, records_text
+from capmj.agents.report.verdict import CheckRun, rerun_check
 
 __all__ = ["HOLDS_AT_START", "GoalCheckReporter"]
 

@@ -1,35 +1,25 @@
-"""Reporters: after a plan ran, judge whether the goal is achieved (and explain why not).
+"""The text reporter: the ``parse_completion`` LMP writes checking code over the settled scene.
 
-Two modes, as in CapRavens:
-
-* **text** — the ``parse_completion`` LMP writes checking code over the settled scene that sets
-  ``judge`` (bool), ``reason`` and optionally ``wrong`` (names of the objects whose state is
-  wrong); the code runs in the sandbox with the read-only API plus the pre-bound names of
-  :mod:`capmj.agents.reporter_env` (``poses``, ``sizes``, ``goal_objects``, ``in_zone`` ...), so a
-  completion that drops its first line still runs.  :class:`TextReporter`, here.
-* **vlm** — a vision-language model judges front-camera images (:mod:`capmj.agents.reporter_vlm`).
+The code sets ``judge`` (bool), ``reason`` and optionally ``wrong`` (names of the objects whose
+state is wrong); it runs in the sandbox with the read-only API plus the pre-bound names of
+:mod:`capmj.agents.report.text_env` (``poses``, ``sizes``, ``goal_objects``, ``in_zone`` ...), so a
+completion that drops its first line still runs.  :class:`TextReporter` is the ``thesis`` prompt of
+``--reporter text``; the other reporters and how one is chosen by name are in
+:mod:`capmj.agents.report` (the vision-language one: :mod:`capmj.agents.report.vlm`).
 
 What a verdict is, where it came from (``code``, ``repair``, ``direct``, ``unknown``) and how it is
-read from an answer: :mod:`capmj.agents.verdict`.  :func:`make_reporter` builds a reporter by name.
+read from an answer: :mod:`capmj.agents.report.verdict`.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from capmj.agents.choices import REPORTER_PROMPTS, REPORTERS
 from capmj.agents.lmp.session import LMPCall, LMPSession
-from capmj.agents.reporter_checked import CheckedReporter
-from capmj.agents.reporter_env import PREBOUND, reporter_env
-from capmj.agents.reporter_goalcheck import GoalCheckReporter
-from capmj.agents.reporter_relations import RelationsReporter
-from capmj.agents.reporter_records import RecordsReporter
-from capmj.agents.reporter_vlm import VLMReporter
-from capmj.agents.verdict import CheckRun, Report, check, direct_verdict, parse_verdict
-from capmj.errors import ConfigError
+from capmj.agents.report.text_env import PREBOUND, reporter_env
+from capmj.agents.report.verdict import CheckRun, Report, check, direct_verdict
 
-# Re-exported: Report and parse_verdict (tests import them from here), VLMReporter (make_reporter's).
-__all__ = ["Report", "TextReporter", "VLMReporter", "make_reporter", "parse_verdict"]
+__all__ = ["TextReporter"]
 
 
 def _repair_request(problem: str, question: str) -> str:
@@ -47,6 +37,9 @@ class TextReporter:
     """``parse_completion`` over the settled scene: code, one repair, then the direct verdict."""
 
     mode = "text"
+
+    def __init__(self, prompt_directory: Any = None) -> None:
+        """``prompt_directory`` is the session's too: its prompt is read through the session."""
 
     def start(self, ctx: Any) -> None:  # nothing to capture before acting
         return None
@@ -79,24 +72,3 @@ class TextReporter:
 
     def close(self) -> None:
         return None
-
-
-def make_reporter(mode: str, prompt_directory: Any = None, prompt: str = "thesis") -> Any:
-    """The reporter of ``mode`` (None for ``none``); ``prompt`` selects the text reporter's prompt."""
-    if prompt not in REPORTER_PROMPTS or (prompt != "thesis" and mode == "vlm"):
-        raise ConfigError(f"reporter prompt {prompt!r}: valid: {', '.join(REPORTER_PROMPTS)} (not thesis: text only)")
-    if mode == "none":
-        return None
-    if mode == "text" and prompt == "checked":
-        return CheckedReporter(prompt_directory)
-    if mode == "text" and prompt == "records":
-        return RecordsReporter(prompt_directory)
-    if mode == "text" and prompt == "goalcheck":
-        return GoalCheckReporter(prompt_directory)
-    if mode == "text" and prompt == "relations":
-        return RelationsReporter(prompt_directory)
-    if mode == "text":
-        return TextReporter()
-    if mode == "vlm":
-        return VLMReporter(prompt_directory)
-    raise ConfigError(f"unknown reporter {mode!r}; valid reporters: {', '.join(REPORTERS)}")

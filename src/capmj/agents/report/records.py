@@ -11,18 +11,18 @@ Why, from the shared 1.5B model's answers on the judge's 39-state subset:
   (``if facts[1]['centre'] != ...``), because a code model reads the system prompt's "continue the
   Python file" literally, and its verdicts flipped to "not achieved" for all 14 states asked.
 
-So ``records`` meets the model where it is: the facts of :mod:`capmj.agents.scene_facts` become a
-Python list of dicts (:mod:`capmj.agents.scene_records`), the prompt
+So ``records`` meets the model where it is: the facts of :mod:`capmj.agents.report.scene_facts` become a
+Python list of dicts (:mod:`capmj.agents.report.scene_records`), the prompt
 (``prompts/reporter_records.py``) documents the keys and shows three short checks, and the model
 writes code that sets ``judge``, ``reason`` and ``wrong``.  The code runs in the sandbox like every
-other model-written code (:func:`capmj.agents.verdict.check`), with one repair request
-on failure.  Still no verdict: the ``checked`` question (:class:`~capmj.agents.reporter_checked.CheckedReporter`,
+other model-written code (:func:`capmj.agents.report.verdict.check`), with one repair request
+on failure.  Still no verdict: the ``checked`` question (:class:`~capmj.agents.report.checked.CheckedReporter`,
 the same measured facts, a literal answer parsed and never run) is asked as the ``direct`` source.
 Why: on the judge's 40-state subset (seeds 10001 and 10003) 9-14 states ended unknown, every one
 because the checking code failed twice (a line cut at the copy stop, an import, a wrong index),
 while ``checked`` reached a verdict on every state it was asked.  Not the ``thesis`` direct prompt:
 it asks the model to derive the facts again from poses, which is what this prompt exists to avoid.
-A ``direct`` verdict is recorded and scored, but low-confidence (:func:`capmj.agents.confidence.assess`):
+A ``direct`` verdict is recorded and scored, but low-confidence (:func:`capmj.agents.report.confidence.assess`):
 the ``careful`` loop does not act on it.
 
 The commonest failure was an answer that began by writing the records out again
@@ -44,10 +44,10 @@ import re
 from typing import Any
 
 from capmj.agents.lmp.session import LMPCall, LMPSession
-from capmj.agents.reporter_checked import CheckedReporter
-from capmj.agents.scene_facts import state_from_api
-from capmj.agents.scene_records import RECORD_KEYS, records, records_text, start_areas_of
-from capmj.agents.verdict import CheckRun, Report, check
+from capmj.agents.report.checked import CheckedReporter
+from capmj.agents.report.scene_facts import state_from_api
+from capmj.agents.report.scene_records import RECORD_KEYS, records, records_text, start_areas_of
+from capmj.agents.report.verdict import CheckRun, Report, check
 from capmj.llm.provider import derived_seed
 from capmj.sim.state import SceneState
 

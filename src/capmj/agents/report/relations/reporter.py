@@ -12,7 +12,7 @@ So ``relations`` keeps what made ``goalcheck`` affordable and honest — the que
 goal and the inventory (the keys acting cannot change), the answer is written before the result is
 seen, and it runs on the start scene too, where no goal holds — and takes the plumbing away: the
 model writes calls such as ``require_inside(blocks(color="red"), zone("green"))`` and
-``require_stack(blocks(color="red"))`` (:mod:`capmj.agents.relation_checks`), each of which measures
+``require_stack(blocks(color="red"))`` (:mod:`capmj.agents.report.relations.checks`), each of which measures
 one relation and names the objects that break it.  The verdict is "achieved" exactly when no call
 failed; ``wrong`` is the objects the failed calls name, so a "not achieved" always names movable
 objects.  The prompt (``prompts/reporter_relations.py``) documents the calls and shows examples for
@@ -23,19 +23,19 @@ Each answer gets one repair request when it tests nothing or cannot be right:
 * it calls no ``require_*`` (:data:`BLIND`), or a name the prompt does not define (the request
   lists the valid names; never a function written by ``parse_function``: a made-up check would be
   a second, unmeasured reporter).  Still so after the repair: the ``checked`` question as ``direct``
-  (:class:`~capmj.agents.reporter_records.RecordsReporter`);
+  (:class:`~capmj.agents.report.records.RecordsReporter`);
 * one contradiction has a reading: a group required as one tower and in layers of several is read
   as required in layers, the tower asking only for its place (:data:`LAYERED`; the prompt says a
   structure with several blocks in a layer is ``require_layers``);
 * its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
-  :meth:`~capmj.agents.relation_checks.Failures.impossible`): it would say "not achieved", naming
+  :meth:`~capmj.agents.report.relations.checks.Failures.impossible`): it would say "not achieved", naming
   objects, of every state.  Still so after the repair: kept, low-confidence (``impossible_check``);
 * it picks a block colour or a count the goal does not give
-  (:func:`~capmj.agents.relation_grounding.ungrounded`: "the orange zone" read as the orange blocks,
+  (:func:`~capmj.agents.report.relations.grounding.ungrounded`: "the orange zone" read as the orange blocks,
   a guessed colour and count).  Still so after the repair: kept, low-confidence (``ungrounded_literal``);
 * its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
   block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``);
-* it never asks for a relation the goal names (:func:`~capmj.agents.relation_coverage.uncovered`:
+* it never asks for a relation the goal names (:func:`~capmj.agents.report.relations.coverage.uncovered`:
   "stack" with no stack or layers call, "in the zone" with no place ...).  Still so after the
   repair: kept, low-confidence (``misses_a_relation``).
 
@@ -50,13 +50,13 @@ from typing import Any
 
 from capmj.agents.lmp.codeprep import named_calls, undefined_calls
 from capmj.agents.lmp.session import LMPCall, LMPSession
-from capmj.agents.relation_checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
-from capmj.agents.relation_coverage import uncovered
-from capmj.agents.relation_grounding import ungrounded
-from capmj.agents.reporter_records import RecordsReporter
+from capmj.agents.report.relations.checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
+from capmj.agents.report.relations.coverage import uncovered
+from capmj.agents.report.relations.grounding import ungrounded
+from capmj.agents.report.records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
-from capmj.agents.scene_records import INVENTORY_KEYS, records, records_text
-from capmj.agents.verdict import CheckRun
+from capmj.agents.report.scene_records import INVENTORY_KEYS, records, records_text
+from capmj.agents.report.verdict import CheckRun
 from capmj.errors import PlanError, describe
 
 __all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "RelationsReporter"]
@@ -73,14 +73,14 @@ HOLDS_AT_START = ("every require_... call passes in the scene the robot started 
 
 LAYERED = ("require_stack of objects also required in layers of several is read as their place only: "
            "a structure with several blocks in a layer is require_layers")
-"""The transcript note when a tower call is read as its place (:meth:`~capmj.agents.relation_checks.Failures.layered_towers`)."""
+"""The transcript note when a tower call is read as its place (:meth:`~capmj.agents.report.relations.checks.Failures.layered_towers`)."""
 
 IMPOSSIBLE = "no arrangement of the objects could pass every require_... call, so it says \"not achieved\" of every scene"
 """The start of the problem the repair request states when the calls contradict each other."""
 
 
 def calls_a_check(code: str) -> bool:
-    """Whether ``code`` calls one of :data:`~capmj.agents.relation_checks.CHECKS` (read with :mod:`ast`)."""
+    """Whether ``code`` calls one of :data:`~capmj.agents.report.relations.checks.CHECKS` (read with :mod:`ast`)."""
     try:
         tree = ast.parse(code)
     except SyntaxError:

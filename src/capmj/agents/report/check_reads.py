@@ -25,8 +25,8 @@ import ast
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-from capmj.agents.scene_facts import AREAS
-from capmj.agents.scene_records import INVENTORY_KEYS, RECORD_KEYS
+from capmj.agents.report.scene_facts import AREAS
+from capmj.agents.report.scene_records import INVENTORY_KEYS, RECORD_KEYS
 
 __all__ = ["MEASURED_KEYS", "WORDS", "blind_problem", "keys_read", "unmatched_comparisons"]
 

@@ -12,11 +12,11 @@ verdict is "achieved" exactly when no call failed, and ``wrong`` is the union of
 
 The relations are generic to tabletop goals (inside, outside, one stack, layers, on the table,
 unmoved, a circle, a row, alternating colours, a count, distinct colours); each is measured from
-the records of :mod:`capmj.agents.scene_records` with the tasks' own tolerances
+the records of :mod:`capmj.agents.report.scene_records` with the tasks' own tolerances
 (:mod:`capmj.tasks.predicates`), as the records themselves are.  No call knows any task.
 
 :func:`relation_env` builds the names a check may use for one scene: the selectors of
-:mod:`capmj.agents.relation_picks` (which also read what each check is given: a record, a list of
+:mod:`capmj.agents.report.relations.picks` (which also read what each check is given: a record, a list of
 records, a name, a colour word where a zone or bowl is meant, because a small model mixes them)
 and the checks here; :class:`Failures` collects what failed.  Anything a check cannot read raises
 :class:`~capmj.errors.PlanError` with the valid choices, which the reporter's repair request quotes.
@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from capmj.agents.relation_picks import SELECTORS, Picks, Record, short
-from capmj.agents.scene_facts import AREAS
+from capmj.agents.report.relations.picks import SELECTORS, Picks, Record, short
+from capmj.agents.report.scene_facts import AREAS
 from capmj.tasks.predicates import CENTRE_TOL, CIRCLE_TOL, ROW_LINE_TOL, fit_circle
 from capmj.tasks.predicates.tolerances import MOVE_TOL
 
@@ -124,7 +124,7 @@ def _names(group: Sequence[Record]) -> frozenset[str]:
 
 
 class _Checks:
-    """The relation checks over one scene's :class:`~capmj.agents.relation_picks.Picks`: each measures its
+    """The relation checks over one scene's :class:`~capmj.agents.report.relations.picks.Picks`: each measures its
     relation and adds what fails to :class:`Failures` (and what it asked for, for :meth:`Failures.impossible`)."""
 
     def __init__(self, picks: Picks, failures: Failures, layered: frozenset[frozenset[str]]) -> None:

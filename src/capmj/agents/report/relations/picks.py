@@ -2,7 +2,7 @@
 
 The ``relations`` reporter's code says *which* objects a relation is about with a few selectors
 (``blocks(color="red")``, ``zone("green")``, ``bowls()`` ...) and passes their results, or names,
-to the checks of :mod:`capmj.agents.relation_checks`.  This module is where those words become
+to the checks of :mod:`capmj.agents.report.relations.checks`.  This module is where those words become
 records.  It is forgiving where a small model's slip has one meaning (``blocks(color="big")`` is a
 size, ``b.color`` reads the key, ``zone("zone")`` and a zone colour nothing in the scene has are
 the only zone) and strict everywhere else: anything it cannot read raises
@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from capmj.agents.scene_facts import AREAS
+from capmj.agents.report.scene_facts import AREAS
 from capmj.errors import PlanError
 from capmj.sim.palette import COOL, WARM
 

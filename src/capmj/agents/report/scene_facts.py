@@ -4,7 +4,7 @@ Why: with the thesis's reporter (``parse_completion``) the model has to derive e
 write code that reads poses, knows a zone's size and a bowl's radius, and tests containment and
 stacking.  The shared 1.5B model got that wrong so often that its verdicts agreed with the task
 predicate on only 43-55 % of attempts.  The ``checked`` reporter prompt
-(:mod:`capmj.agents.reporter_checked`) instead shows one line of *measured* facts per object and
+(:mod:`capmj.agents.report.checked`) instead shows one line of *measured* facts per object and
 asks only whether they match the goal.
 
 Each fact uses capmj's own rule, the one the task predicates use (:mod:`capmj.tasks.predicates`):

@@ -13,8 +13,8 @@ Every reporter tries hard to reach a verdict; the :class:`Report` says which ste
 4. ``unknown`` — none of these gave a bool.  What an unknown verdict does to the loop is the
    agent's ``on_unknown`` policy (:mod:`capmj.agents.llm_agent`).
 
-The reporters themselves are :mod:`capmj.agents.reporter` (text), :mod:`capmj.agents.reporter_vlm`
-and :mod:`capmj.agents.reporter_checked`.
+The reporters themselves are :mod:`capmj.agents.report.text` (text), :mod:`capmj.agents.report.vlm`
+and :mod:`capmj.agents.report.checked`.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ class Report:
     errors: tuple[str, ...] = ()
     """Every problem met on the way, in order (``"code: ..."``, ``"repair: ..."``, ...)."""
     doubt: str | None = None
-    """Why the reporter itself doubts this verdict: a key of :data:`capmj.agents.confidence.LOW_CONFIDENCE`
+    """Why the reporter itself doubts this verdict: a key of :data:`capmj.agents.report.confidence.LOW_CONFIDENCE`
     (``copies_example``: the reason is the prompt's own example word for word; ``holds_at_start``: the
     check also says "achieved" of the scene the robot started from)."""
 
