@@ -1,7 +1,7 @@
 """How fast the deterministic plan budget stops hostile code, as JSON.
 
 Runs endless and allocation-hungry plans in the sandbox with the LLM agent's default plan budget
-(``capmj.agents.planner.DEFAULT_PLAN_BUDGET``) and prints, per program, which budget stopped it,
+(``capmj.agents.llm_agent.planner.DEFAULT_PLAN_BUDGET``) and prints, per program, which budget stopped it,
 after how many executed lines (the same on every machine) and the wall time it took (this
 machine, under its current load).  The issue's target: ``while True: pass`` ends in < 2 s.
 
@@ -15,7 +15,7 @@ import os
 import platform
 import time
 
-from capmj.agents.planner import DEFAULT_PLAN_BUDGET
+from capmj.agents.llm_agent.planner import DEFAULT_PLAN_BUDGET
 from capmj.agents.sandbox import run_code
 from capmj.errors import BudgetExceeded
 

@@ -69,8 +69,8 @@ def run_one(fixture: HostilePlan) -> dict[str, Any]:
     if fixture.secret:
         os.environ["OPENAI_API_KEY"] = PLANTED_KEY
         os.environ["OPENAI_BASE_URL"] = "http://127.0.0.1:9/v1"  # never asked: the client is scripted
-    from capmj.agents.llm_agent import LLMAgent
-    from capmj.agents.llm_options import LLMAgentOptions
+    from capmj.agents.llm_agent.agent import LLMAgent
+    from capmj.agents.llm_agent.options import LLMAgentOptions
     from capmj.agents.sandbox import check_code
     from capmj.bench.failures import classify
     from capmj.bench.migrate import as_record

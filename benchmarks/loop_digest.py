@@ -33,8 +33,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from llm_stub_server import StubLLMServer, prompt_text  # noqa: E402
 
-from capmj.agents.llm_agent import LLMAgent  # noqa: E402
-from capmj.agents.llm_options import LLMAgentOptions  # noqa: E402
+from capmj.agents.llm_agent.agent import LLMAgent  # noqa: E402
+from capmj.agents.llm_agent.options import LLMAgentOptions  # noqa: E402
 from capmj.llm import LLMConfig  # noqa: E402
 from capmj.runner import run_episode  # noqa: E402
 from capmj.tasks.registry import get_task  # noqa: E402

@@ -39,7 +39,7 @@ def record_example(path: Path) -> Path:
     sys.path.insert(0, str(ROOT / "tests"))
     from llm_stub_server import StubLLMServer
 
-    from capmj.agents.llm_agent import LLMAgent
+    from capmj.agents.llm_agent.agent import LLMAgent
     from capmj.llm import LLMConfig
     from capmj.runner import record_episode
     from capmj.tasks.registry import get_task

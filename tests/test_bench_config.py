@@ -88,7 +88,7 @@ def test_option_names_are_defined_once() -> None:
     assert set(LABEL_OPTIONS) <= set(AGENT_OPTIONS)
     from dataclasses import fields
 
-    from capmj.agents.llm_options import CONFIG_FIELDS, LLM_AGENT_OPTIONS, LLMAgentOptions
+    from capmj.agents.llm_agent.options import CONFIG_FIELDS, LLM_AGENT_OPTIONS, LLMAgentOptions
     from capmj.llm import LLMConfig
 
     assert set(AGENT_OPTIONS) <= set(LLM_AGENT_OPTIONS)  # every option reaches the agent's configuration...

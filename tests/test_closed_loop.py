@@ -182,7 +182,7 @@ def test_attempt_after_a_plan_not_run_replans_from_the_last_plan_that_ran(server
 
 
 def test_replan_sampling_schedule() -> None:
-    from capmj.agents.planner import MAX_REPLAN_TEMPERATURE, replan_sampling
+    from capmj.agents.llm_agent.planner import MAX_REPLAN_TEMPERATURE, replan_sampling
 
     assert [replan_sampling(0.7, 10001, 2, r).temperature for r in range(5)] == [0.7, 1.0, 1.3, 1.5, 1.5]
     assert replan_sampling(0.0, 10001, 2, 1).temperature == 0.3
@@ -272,7 +272,7 @@ def test_plans_not_rerun_and_extra_requests_are_counted() -> None:
 
 def test_loop_options_reach_the_agent_and_bad_ones_are_rejected() -> None:
     from capmj.agents.factory import make_agent
-    from capmj.agents.llm_options import LLMAgentOptions
+    from capmj.agents.llm_agent.options import LLMAgentOptions
     from capmj.bench.cli import build_parser
     from capmj.errors import ConfigError
 

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from capmj.agents.llm_agent import LLMAgent
-from capmj.agents.llm_options import LLMAgentOptions
+from capmj.agents.llm_agent.agent import LLMAgent
+from capmj.agents.llm_agent.options import LLMAgentOptions
 from capmj.agents.report.verdict import parse_verdict
 from capmj.agents.sandbox import SandboxBudget
 from capmj.llm import LLMConfig

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from capmj.agents.report.confidence import Assessment
-from capmj.agents.loop_policy import Outcome, decide
+from capmj.agents.llm_agent.loop_policy import Outcome, decide
 from capmj.errors import ConfigError
 from capmj.records import LOOP_RULES
 from llm_stub_server import StubLLMServer, prompt_text
@@ -212,7 +212,7 @@ def test_careful_rules_fire_only_where_they_should() -> None:
 
 def test_bad_policies_are_refused_and_the_options_reach_the_agent() -> None:
     from capmj.agents.factory import make_agent
-    from capmj.agents.llm_options import LLMAgentOptions
+    from capmj.agents.llm_agent.options import LLMAgentOptions
     from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
     from capmj.agents.report.registry import make_reporter
     from capmj.bench.cli import build_parser

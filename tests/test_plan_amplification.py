@@ -23,8 +23,8 @@ from hostile_plans import ALIASED, HOSTILE_PLANS, PLANTED_KEY, layer_of
 from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.agents.api.planner_api import PlannerAPI
-from capmj.agents.llm_agent import LLMAgent
-from capmj.agents.llm_options import LLMAgentOptions
+from capmj.agents.llm_agent.agent import LLMAgent
+from capmj.agents.llm_agent.options import LLMAgentOptions
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS, LMPSession
 from capmj.agents.sandbox import SandboxBudget, check_code, run_code
 from capmj.agents.sandbox.sizes import array_elements, broadcast_elements, capped_text, preview, text_length

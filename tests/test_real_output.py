@@ -84,7 +84,7 @@ say(str(list({{n for n in names}})))
 """
 WORKER = textwrap.dedent("""
     import json, sys
-    from capmj.agents.llm_agent import LLMAgent
+    from capmj.agents.llm_agent.agent import LLMAgent
     from capmj.llm import LLMConfig
     from capmj.runner import run_episode
     from capmj.tasks.registry import get_task

@@ -14,7 +14,7 @@ from typing import Any, Iterator
 
 import pytest
 
-from capmj.agents.llm_agent import LLMAgent
+from capmj.agents.llm_agent.agent import LLMAgent
 from capmj.agents.sandbox import SandboxBudget
 from capmj.bench.cli import main
 from capmj.bench.failures import LABELS, classify

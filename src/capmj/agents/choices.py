@@ -1,8 +1,8 @@
 """The names the LLM agent's loop options take, in one import-light module.
 
 The command line (:mod:`capmj.bench.options`, whose ``choices`` and help name the valid values), the
-agent's option record (:mod:`capmj.agents.llm_options`) and the modules that give the names their
-meaning (:mod:`capmj.agents.report.registry`, :mod:`capmj.agents.loop_policy`) all read them.  They
+agent's option record (:mod:`capmj.agents.llm_agent.options`) and the modules that give the names their
+meaning (:mod:`capmj.agents.report.registry`, :mod:`capmj.agents.llm_agent.loop_policy`) all read them.  They
 live here, importing nothing of capmj, so the bench's parser does not import the reporters (and
 litellm's neighbours) to build its help, and a new reporter is added in one place: a line of
 :data:`REPORTER_TABLE`.
@@ -51,7 +51,7 @@ REPORTER_PROMPTS: tuple[str, ...] = tuple(REPORTER_TABLE["text"])
 """``--reporter-prompt``: the text reporter's prompts, ``thesis`` (the default) first."""
 
 LOOP_POLICIES = ("thesis", "careful")
-"""``--loop-policy``: see :mod:`capmj.agents.loop_policy`."""
+"""``--loop-policy``: see :mod:`capmj.agents.llm_agent.loop_policy`."""
 
 ON_UNKNOWN = ("replan", "stop")
 """``--on-unknown``: what an unknown reporter verdict does: re-plan like a False verdict (default),

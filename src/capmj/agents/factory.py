@@ -22,7 +22,7 @@ from capmj.errors import ConfigError
 AGENTS: dict[str, str] = {
     "oracle": "capmj.agents.oracle:OracleAgent",
     "reference": "capmj.agents.reference:ReferenceAgent",
-    "llm": "capmj.agents.llm_agent:LLMAgent.from_options",
+    "llm": "capmj.agents.llm_agent.agent:LLMAgent.from_options",
 }
 """Agent name -> ``module:attribute`` of its class or of a factory taking keyword options
 (``attribute`` may be dotted: the LLM agent's flat options go through ``LLMAgent.from_options``,

@@ -20,7 +20,7 @@ from typing import Any
 
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.base import EpisodeContext
-from capmj.agents.llm_options import DEFAULT_LMP_BUDGET
+from capmj.agents.llm_agent.options import DEFAULT_LMP_BUDGET
 from capmj.agents.lmp.meter import LLMMeter, parse_price
 from capmj.agents.lmp.session import LMPSession, find_llm_error
 from capmj.agents.report.confidence import assess

@@ -1,6 +1,6 @@
 """One attempt of the LLM agent's closed loop, as recorded in ``llm.attempts`` of an episode.
 
-The LLM agent (:mod:`capmj.agents.llm_agent`) builds one :class:`AttemptRecord` per attempt; the
+The LLM agent (:mod:`capmj.agents.llm_agent.agent`) builds one :class:`AttemptRecord` per attempt; the
 readers of ``episodes.jsonl`` (failure attribution, loop statistics, export, replay-check) read its
 attributes.  The meaning of every field is written once, in :data:`ATTEMPT_FIELDS`, which the docs
 and a test check against the dataclass.
@@ -32,7 +32,7 @@ LOOP_RULES: dict[str, str] = {
     "llm_budget": "the episode's LLM budget is used up: stop",
 }
 """What the loop decided after an attempt (``rule`` of an attempt record), by
-:func:`capmj.agents.loop_policy.decide`.  The loop also stops when the attempts are used up
+:func:`capmj.agents.llm_agent.loop_policy.decide`.  The loop also stops when the attempts are used up
 (``LLMNotes.stopped``), whatever the rule."""
 
 ATTEMPT_FIELDS: dict[str, str] = {

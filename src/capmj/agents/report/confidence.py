@@ -21,7 +21,7 @@ re-plan achieved states at chance.  A verdict whose reason copies the prompt's o
 about the scene either, nor is a check that says "achieved" of the scene the robot started from
 (:class:`~capmj.agents.report.goalcheck.GoalCheckReporter`): no task's goal holds there, nor is a
 check whose text cannot depend on the scene (``blind_check``).  The ``careful`` loop
-(:mod:`capmj.agents.loop_policy`) keeps the state instead of re-planning on a low-confidence
+(:mod:`capmj.agents.llm_agent.loop_policy`) keeps the state instead of re-planning on a low-confidence
 verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
 """
 

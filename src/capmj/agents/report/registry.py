@@ -1,7 +1,7 @@
 """The reporter plugin axis: the :class:`Reporter` protocol, and reporters built by name.
 
 A reporter judges, after a plan ran, whether the goal is achieved.  The closed loop
-(:class:`~capmj.agents.llm_agent.LLMAgent`) and the judge (:mod:`capmj.judge.evaluate`) call it
+(:class:`~capmj.agents.llm_agent.agent.LLMAgent`) and the judge (:mod:`capmj.judge.evaluate`) call it
 the same way: :meth:`Reporter.start` before the first attempt acts, :meth:`Reporter.judge` on each
 settled scene to be judged, :meth:`Reporter.close` at the end.  The reporters are named once, in
 :data:`capmj.agents.choices.REPORTER_TABLE` (``--reporter`` → ``--reporter-prompt`` →

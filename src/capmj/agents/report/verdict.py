@@ -11,7 +11,7 @@ Every reporter tries hard to reach a verdict; the :class:`Report` says which ste
    the object poses and the goal, answered as ``judge = True/False`` + ``reason`` (+ ``wrong``),
    parsed with :mod:`ast`, never executed (:func:`direct_verdict`);
 4. ``unknown`` — none of these gave a bool.  What an unknown verdict does to the loop is the
-   agent's ``on_unknown`` policy (:mod:`capmj.agents.llm_agent`).
+   agent's ``on_unknown`` policy (:mod:`capmj.agents.llm_agent.agent`).
 
 The reporters themselves are :mod:`capmj.agents.report.text` (text), :mod:`capmj.agents.report.vlm`
 and :mod:`capmj.agents.report.checked`.

@@ -16,7 +16,7 @@ Per episode (``act``), under the default ``loop_policy="thesis"``::
 
 ``loop_policy="careful"`` judges a plan that raised after acting, re-plans from the current state
 when the verdict names only some objects wrong, and stops on a low-confidence verdict; the rules
-and why are in :mod:`capmj.agents.loop_policy`, which decides after every attempt (the rule that
+and why are in :mod:`capmj.agents.llm_agent.loop_policy`, which decides after every attempt (the rule that
 fired is the attempt record's ``rule``).
 
 CapRavens re-ran the *old* plan before the new one after a failed verdict; capmj resets the scene
@@ -42,12 +42,12 @@ from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.report.confidence import assess
 from capmj.agents.lmp.meter import LLMMeter, check_limits
-from capmj.agents.llm_options import LLMAgentOptions, llm_agent_configs
+from capmj.agents.llm_agent.options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
-from capmj.agents.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
+from capmj.agents.llm_agent.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
 from capmj.agents.report.plan_check import plan_check
-from capmj.agents.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
+from capmj.agents.llm_agent.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.report.registry import Reporter, make_reporter
 from capmj.agents.report.verdict import Report
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
@@ -67,7 +67,7 @@ class LLMAgent:
 
     ``config`` says what to ask (``config.model`` is any litellm model string: ``gpt-4o-mini``,
     ``ollama/qwen2.5-coder``, ``openai/<alias>`` with ``api_base`` for OpenAI-compatible local
-    servers) and is used as given; ``options`` how the loop runs (:mod:`capmj.agents.llm_options`).
+    servers) and is used as given; ``options`` how the loop runs (:mod:`capmj.agents.llm_agent.options`).
     :meth:`from_options` builds both from flat keyword options, as the bench does.
     """
 
@@ -89,7 +89,7 @@ class LLMAgent:
     @classmethod
     def from_options(cls, **options: Any) -> "LLMAgent":
         """The agent of flat keyword options (the bench's ``agent_options``; ``None`` = not given):
-        :func:`~capmj.agents.llm_options.llm_agent_configs` splits them into the two records."""
+        :func:`~capmj.agents.llm_agent.options.llm_agent_configs` splits them into the two records."""
         return cls(*llm_agent_configs(options))
 
     @property

@@ -1,6 +1,6 @@
 """The LLM agent's configuration as two frozen records, and the one place flat options become them.
 
-An :class:`~capmj.agents.llm_agent.LLMAgent` is configured by what it asks the model
+An :class:`~capmj.agents.llm_agent.agent.LLMAgent` is configured by what it asks the model
 (:class:`~capmj.llm.LLMConfig`: model, server, sampling, timeouts, cache) and how its loop runs
 (:class:`LLMAgentOptions`: reporter, attempts, loop policy, prompts, sandbox budgets, episode
 limits).  Each record checks its own values when built, so a bad value is a ``ConfigError``
@@ -22,8 +22,8 @@ from typing import Any, Callable, Mapping
 from capmj.agents.choices import ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
 from capmj.agents.lmp.meter import Price, check_limit, parse_price
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
-from capmj.agents.loop_policy import check_policy
-from capmj.agents.planner import DEFAULT_PLAN_BUDGET
+from capmj.agents.llm_agent.loop_policy import check_policy
+from capmj.agents.llm_agent.planner import DEFAULT_PLAN_BUDGET
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError
 from capmj.llm import LLMConfig
@@ -32,11 +32,11 @@ from capmj.llm.cache import env_cache_dir
 DEFAULT_REPLAN_TEMPERATURE = 0.7
 """Sampling temperature of the first planner request of attempts 2, 3, ... (at 0 a small model
 repeated its failed plan byte for byte); retries after an identical answer go hotter
-(:func:`capmj.agents.planner.replan_sampling`)."""
+(:func:`capmj.agents.llm_agent.planner.replan_sampling`)."""
 
 DEFAULT_REPLAN_RETRIES = 3
 """Requests after a re-plan answer identical to an earlier attempt's plan, before that plan is
-recorded as not re-run (the temperatures and seeds are :func:`capmj.agents.planner.replan_sampling`)."""
+recorded as not re-run (the temperatures and seeds are :func:`capmj.agents.llm_agent.planner.replan_sampling`)."""
 MAX_REPLAN_RETRIES = 10
 """Upper bound of ``replan_retries``: each retry is a full planner request."""
 
