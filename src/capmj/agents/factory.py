@@ -29,11 +29,6 @@ AGENTS: dict[str, str] = {
 which builds its typed configuration and rejects unknown names itself)."""
 
 
-def agent_names() -> list[str]:
-    """Every agent name the factory knows (whether or not its module is importable right now)."""
-    return list(AGENTS)
-
-
 def _load(name: str) -> Any:
     if name not in AGENTS:
         raise ConfigError(f"unknown agent {name!r}; valid agents: {', '.join(AGENTS)}")
@@ -101,4 +96,4 @@ def has_setting(agent: Any, name: str) -> bool:
     return hasattr(getattr(agent, "options", None), name) or hasattr(agent, name)
 
 
-__all__ = ["AGENTS", "agent_names", "agent_setting", "has_setting", "make_agent"]
+__all__ = ["AGENTS", "agent_setting", "has_setting", "make_agent"]
