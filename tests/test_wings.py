@@ -161,3 +161,20 @@ def test_every_reporter_of_the_table_lives_in_report_and_is_a_reporter() -> None
             reporter = cls(None)
             missing = {n for n in protocol if not hasattr(reporter, n)}
             assert not missing and reporter.mode == mode, (mode, prompt, missing)
+
+
+def test_the_architecture_doc_names_every_module_of_agents_in_its_folder() -> None:
+    rows = {line.split("|")[1].strip().strip("`"): line for line in
+            (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8").splitlines()
+            if line.startswith("| `src/capmj/agents/")}
+    missing = []
+    for path in sorted(AGENTS.rglob("*.py")):
+        if path.name == "__init__.py":
+            continue
+        rel = path.relative_to(SRC.parent)
+        folder = str(rel.parent) + "/"
+        while folder not in rows and folder != "src/capmj/agents/":  # a sub-folder is named in its wing's row
+            folder = str(Path(folder).parent) + "/"
+        if f"`{path.name}`" not in rows.get(folder, ""):
+            missing.append(str(rel))
+    assert not missing, f"docs/architecture.md does not name these in their folder's row: {missing}"
