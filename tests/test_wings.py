@@ -178,3 +178,19 @@ def test_the_architecture_doc_names_every_module_of_agents_in_its_folder() -> No
         if f"`{path.name}`" not in rows.get(folder, ""):
             missing.append(str(rel))
     assert not missing, f"docs/architecture.md does not name these in their folder's row: {missing}"
+
+
+def test_the_docs_list_the_reporters_of_the_table() -> None:
+    """Where a doc spells out the choices (``--reporter none|text|vlm``), they are the table's."""
+    import re
+
+    from capmj.agents.choices import REPORTER_PROMPTS, REPORTERS
+
+    want = {"--reporter": list(REPORTERS), "--reporter-prompt": list(REPORTER_PROMPTS)}
+    found = 0
+    for doc in sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md", ROOT / "prompts" / "README.md"]:
+        for m in re.finditer(r"(--reporter(?:-prompt)?) ([a-z]+(?:\\?\|[a-z]+)+)", doc.read_text(encoding="utf-8")):
+            found += 1
+            names = m.group(2).replace("\\|", "|").split("|")
+            assert names == want[m.group(1)], f"{doc.relative_to(ROOT)}: {m.group(0)} (the table: {want[m.group(1)]})"
+    assert found >= 4
