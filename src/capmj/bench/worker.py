@@ -9,8 +9,10 @@ cannot drift apart in what an episode's record holds.
 
 from __future__ import annotations
 
+import os
 import pickle
 import queue
+import resource
 import signal
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -18,7 +20,7 @@ from typing import Any, Mapping, Sequence
 
 from capmj.agents.factory import make_agent
 from capmj.bench.results import sanitize
-from capmj.errors import describe, error_facts
+from capmj.errors import ConfigError, describe, error_facts
 from capmj.llm.gate import set_request_gate
 from capmj.records import EpisodeResult
 from capmj.tasks import registry
@@ -169,10 +171,34 @@ to the calls that follow only through the process itself, so this one slot is se
 and Ray actors hold their own ``Worker``)."""
 
 
+MEMORY_ENV = "CAPMJ_WORKER_MEMORY_MB"
+"""Environment variable: the data-segment limit (``RLIMIT_DATA``, MiB) of each pool worker;
+``0`` turns it off.  Default :data:`DEFAULT_MEMORY_MB`."""
+DEFAULT_MEMORY_MB = 8192
+
+
+def limit_memory() -> int | None:
+    """Cap this process's private memory (``RLIMIT_DATA``): the backstop behind the sandbox's size
+    budgets, so an allocation they cannot foresee ends as a ``MemoryError`` of one episode (a
+    recorded ``budget`` failure) instead of the machine's memory.  Returns the limit in MiB."""
+    try:
+        mb = int(os.environ.get(MEMORY_ENV, DEFAULT_MEMORY_MB))
+    except ValueError:
+        raise ConfigError(f"{MEMORY_ENV} must be a whole number of MiB (0: no limit), "
+                          f"not {os.environ.get(MEMORY_ENV)!r}") from None
+    if mb <= 0:
+        return None
+    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    limit = mb << 20 if hard == resource.RLIM_INFINITY else min(mb << 20, hard)
+    resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    return mb
+
+
 def init_pool_worker(spec: AgentSpec, registered: bytes | None = None, llm_gate: Any = None) -> None:
-    """Pool initializer: this process's :class:`Worker`."""
+    """Pool initializer: this process's :class:`Worker`, under the memory limit."""
     global _pool_worker
     ignore_sigint()
+    limit_memory()
     _pool_worker = Worker(spec, registered, llm_gate)
 
 
@@ -183,4 +209,5 @@ def run_pool_batch(jobs: Sequence[Job]) -> list[dict[str, Any]]:
     return _pool_worker.run_batch(jobs)
 
 
-__all__ = ["AgentSpec", "Job", "Worker", "failed_record", "ignore_sigint", "init_pool_worker", "run_pool_batch"]
+__all__ = ["AgentSpec", "DEFAULT_MEMORY_MB", "Job", "MEMORY_ENV", "Worker", "failed_record", "ignore_sigint",
+           "init_pool_worker", "limit_memory", "run_pool_batch"]

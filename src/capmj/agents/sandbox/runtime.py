@@ -42,6 +42,11 @@ def _execute(session: Session, thunk: Callable[[], Any]) -> Any:
         line = line_of(exc.__traceback__, session.filename)
         raise located_error(type(exc.error), exc.text, line=line, code=session.code,
                             program=session.program) from exc.error
+    except MemoryError as exc:  # the worker's memory limit: the backstop for what the counting cannot see
+        line = line_of(exc.__traceback__, session.filename)
+        raise located_error(BudgetExceeded, "BudgetExceeded: the process ran out of memory (its memory limit "
+                            "is the backstop of the sandbox's size budgets)", line=line, code=session.code,
+                            program=session.program) from None
     except Exception as exc:  # anything the code raised, including errors of env functions
         line = line_of(exc.__traceback__, session.filename)
         kind = BudgetExceeded if isinstance(exc, BudgetExceeded) else PlanError
