@@ -118,7 +118,7 @@ CORPUS: tuple[Hostile, ...] = (
     Hostile("remove-victim", "file", _TYPING_OS + '_os.remove("VICTIM")', "typing.sys", ("os.remove",)),
     Hostile("atexit-deferred", "process",
             'import typing\ntyping.sys.modules["atexit"].register(typing.sys.modules["os"].system, "touch MARKER")',
-            "'system'", ("os.system",)),
+            "'system'", (), stops="harmless"),
     Hostile("patch-trusted-runner", "process",
             _BUILTINS + '_run = _b.__import__("capmj.runner", fromlist=["run_episode"])\n_orig = _run.run_episode\n'
             'def _evil(*a, **k):\n    typing.sys.modules["os"].system("touch MARKER")\n    return _orig(*a, **k)\n'

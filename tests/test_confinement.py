@@ -149,6 +149,8 @@ def test_doors_the_guard_cannot_see_are_stopped_by_the_jail_or_the_wire(hostile_
     hostile = BY_ID[hostile_id]
     run, traces = run_hostile(hostile, tmp_path)
     assert run.violation is None and traces == [], (run.violation, traces)
+    if hostile.stops == "harmless":
+        return
     assert not all(r.passed for r in run.results), "a hostile candidate was accepted"
     if hostile.stops == "wire":
         assert "WireError" in run.results[0].detail, run.results[0]
