@@ -27,7 +27,6 @@ import json
 import os
 import signal
 import stat
-import sys
 from typing import Any
 
 from capmj.confine import wire
@@ -113,6 +112,7 @@ class TaskProcess:
         os.close(from_parent)
         os.close(to_parent)
         self.to_child, self.from_child = to_child, from_child
+        self.ended: dict[str, Any] | None = None
 
     def ask(self, payload: bytes) -> bytes:
         """Send one frame, return the answer's payload (or the ``ended`` report when none came)."""
@@ -126,19 +126,21 @@ class TaskProcess:
             return _frame({"ended": {**self.reap(), "wire": str(e)}})
 
     def reap(self) -> dict[str, Any]:
-        try:
-            _, status = os.waitpid(self.pid, 0)
-        except ChildProcessError:
-            return {"exit": None}
-        if os.WIFSIGNALED(status):
-            return {"signal": os.WTERMSIG(status)}
-        return {"exit": os.WEXITSTATUS(status)}
+        if self.ended is None:
+            try:
+                _, status = os.waitpid(self.pid, 0)
+            except ChildProcessError:
+                status = None
+            self.ended = ({"exit": None} if status is None else {"signal": os.WTERMSIG(status)}
+                          if os.WIFSIGNALED(status) else {"exit": os.WEXITSTATUS(status)})
+        return self.ended
 
     def kill(self) -> None:
-        try:
-            os.kill(self.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
+        if self.ended is None:  # never a pid already reaped (it may be another process's by now)
+            try:
+                os.kill(self.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
     def close(self) -> None:
         self.kill()
@@ -215,7 +217,6 @@ def main() -> int:
             write_raw(out, _frame({"error": {"type": "WireError", "message": f"{op!r} before load"}}))
             continue
         write_raw(out, child.ask(payload))
-        sys.stderr.flush()
 
 
 def _precompile(name: str, text: str) -> None:
