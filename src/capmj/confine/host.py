@@ -49,7 +49,8 @@ def _facts(task: Any) -> dict[str, Any]:
     tags = getattr(task, "tags", None)
     new, old = getattr(task, SCENE_METHOD, None), getattr(task, DEPRECATED_SCENE_METHOD, None)
     return {"name": getattr(task, "name", None) if isinstance(getattr(task, "name", None), str) else None,
-            "tags": sorted(t for t in tags if isinstance(t, str)) if isinstance(tags, (set, frozenset)) else None,
+            "tags": sorted(tags) if isinstance(tags, (set, frozenset)) and all(isinstance(t, str) for t in tags)
+            else None,  # malformed: the parent's validation says so
             "doc": (inspect.getdoc(task) or "")[: wire.MAX_DOC],
             "methods": {SCENE_METHOD: callable(new), DEPRECATED_SCENE_METHOD: callable(old),
                         "aliased": callable(new) and old is not None and old == new,
@@ -66,8 +67,6 @@ class Host:
         self._guard = guard
 
     def load(self, msg: dict[str, Any]) -> dict[str, Any]:
-        import inspect as _inspect
-
         if self.task is not None:
             raise RuntimeError("a module is already loaded in this process")
         name, text = str(msg["module"]), str(msg["text"])
@@ -82,7 +81,7 @@ class Host:
         if not hasattr(module, "TASK"):
             raise AttributeError("the module defines no TASK object (end it with TASK = YourTask())")
         task = module.TASK
-        self.task = task() if _inspect.isclass(task) else task
+        self.task = task() if inspect.isclass(task) else task
         return {"facts": _facts(self.task)}
 
     def _scene(self, v: Any) -> Any:
