@@ -109,6 +109,7 @@ GUARD_SAMPLE = ("registry-os-system", "in-sample-scene", "raw-os-open-write", "r
 """One module per door class the guard names (the full corpus runs in ``benchmarks/confinement.py``)."""
 
 
+@pytest.mark.jail
 @pytest.mark.parametrize("hostile_id", GUARD_SAMPLE)
 def test_the_guard_in_the_jail_names_the_door_and_nothing_reaches_the_host(hostile_id, tmp_path):
     hostile = BY_ID[hostile_id]
@@ -124,6 +125,7 @@ def test_the_guard_in_the_jail_names_the_door_and_nothing_reaches_the_host(hosti
         assert failed[0].name == "scenes"
 
 
+@pytest.mark.jail
 def test_the_guard_passes_the_good_candidate(tmp_path):
     good = Hostile("none", "none", "", "", ())
     run, traces = run_hostile(good, tmp_path)
@@ -136,6 +138,7 @@ JAIL_SAMPLE = ("raw-os-open-write", "registry-os-system", "remove-victim", "sock
                "orphan-process", "ctypes-libc-system", "signal-parent")
 
 
+@pytest.mark.jail
 @pytest.mark.parametrize("hostile_id", JAIL_SAMPLE)
 def test_the_jail_alone_leaves_no_trace_on_the_host(hostile_id, tmp_path):
     """The guard switched off (as a candidate that reached the interpreter could): the OS boundary holds."""
@@ -144,6 +147,7 @@ def test_the_jail_alone_leaves_no_trace_on_the_host(hostile_id, tmp_path):
     assert traces == [], traces
 
 
+@pytest.mark.jail
 @pytest.mark.parametrize("hostile_id", [h.id for h in CORPUS if h.stops != "guard"])
 def test_doors_the_guard_cannot_see_are_stopped_by_the_jail_or_the_wire(hostile_id, tmp_path):
     hostile = BY_ID[hostile_id]
@@ -156,6 +160,7 @@ def test_doors_the_guard_cannot_see_are_stopped_by_the_jail_or_the_wire(hostile_
         assert "WireError" in run.results[0].detail, run.results[0]
 
 
+@pytest.mark.jail
 def test_jailed_code_cannot_read_a_key_planted_in_the_parent(tmp_path, monkeypatch):
     """A format-string read of the environment finds the jail's clean environment, not the parent's."""
     monkeypatch.setenv("OPENAI_API_KEY", "sk-planted-in-the-parent")
@@ -165,6 +170,7 @@ def test_jailed_code_cannot_read_a_key_planted_in_the_parent(tmp_path, monkeypat
     assert "sk-planted" not in load.detail and "OPENAI_API_KEY" not in load.detail
 
 
+@pytest.mark.jail
 def test_a_shared_predicate_patched_in_the_jail_stays_intact_here(tmp_path):
     from capmj.tasks import predicates
 
@@ -175,6 +181,7 @@ def test_a_shared_predicate_patched_in_the_jail_stays_intact_here(tmp_path):
     assert bad.name == "not_solved_at_reset" and "already a success" in bad.detail  # its own lie, caught here
 
 
+@pytest.mark.jail
 def test_the_module_runs_under_its_installed_name_at_the_checks(tmp_path):
     """A sleeper keyed on its module name sees the name it will have once installed."""
     from hostile_candidates import MODULE
@@ -195,6 +202,7 @@ def GOOD_TEXT() -> str:  # noqa: N802 - reads like the constant it stands for
 
 
 # --------------------------------------------------------------------------------------- the generator
+@pytest.mark.jail
 def test_a_candidate_past_a_broken_static_check_is_refused_at_runtime_without_repair(tmp_path, monkeypatch):
     """If the static check had a hole, the guard still rejects: no repair round, nothing packaged."""
     import capmj.generate.candidate as cand
@@ -219,6 +227,7 @@ def test_a_candidate_past_a_broken_static_check_is_refused_at_runtime_without_re
     assert not (tmp_path / "marker").exists() and not (tmp_path / "out" / "pyproject.toml").exists()
 
 
+@pytest.mark.jail
 def test_a_module_the_compiler_cannot_take_is_rejected_with_its_reason_and_the_journal_kept(tmp_path):
     """A 1 200-term sum makes ``compile`` raise ``RecursionError``: a parse failure, not a crash."""
     import json

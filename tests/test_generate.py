@@ -25,6 +25,8 @@ from generator_script import GeneratorScript, ScriptedCandidate, candidate
 from llm_stub_server import StubLLMServer, iter_prompts
 from venvs import make_venv, pip_install
 
+pytestmark = pytest.mark.jail
+
 PACKAGE = "capmj-generated-test"
 GOOD = "put-blocks-in-zone-of-same-color"
 

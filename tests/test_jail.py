@@ -29,6 +29,8 @@ from capmj.tasks.protocol import Scene, make_scene
 from generator_script import CANDIDATES
 from hostile_candidates import MODULE, NAME
 
+pytestmark = pytest.mark.jail
+
 GOOD = (CANDIDATES / "good_zone_color.py").read_text()
 
 

@@ -168,6 +168,7 @@ def test_wheel_runs_reference_and_oracle_outside_the_source_tree(installed, tmp_
         assert got[agent.name] == [True, None, r.primitives, r.sim_s]
 
 
+@pytest.mark.jail
 def test_wheel_generates_a_task_with_its_packaged_prompts(installed, tmp_path):
     """``python -m capmj.generate`` against a scripted local server: every prompt it sends comes from the
     wheel's prompts/generator/ (the script recognises the task API text; a missing file is an error)."""
