@@ -1,6 +1,6 @@
 """The pre-bound relation checks of the ``relations`` reporter (:mod:`capmj.agents.report.relations.checks`),
 on hand-built records: each relation holds where it should, fails where it should, and names the
-objects that break it; bad arguments raise PlanError naming the valid choices."""
+objects that break it; bad arguments raise CheckArgumentError naming the valid choices."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 
 from capmj.agents.report.relations.checks import CHECKS, NAMES, relation_env
 from capmj.agents.sandbox import run_code
-from capmj.errors import PlanError
+from capmj.errors import CheckArgumentError, PlanError, describe
 
 
 def block(i: int, color: str, centre: tuple[float, float, float], *, size: str = "small", level: int = 1,
@@ -134,6 +134,40 @@ def test_bad_arguments_name_the_valid_choices(code: str, needle: str) -> None:
     with pytest.raises(PlanError, match="ValueError") as err:
         run_code(code, env)
     assert needle in str(err.value)
+
+
+AREAS_SAID = "['top left', 'top right', 'bottom left', 'bottom right', 'outside the workspace']"
+
+
+@pytest.mark.parametrize(("code", "message"), [
+    ("require_inside(None, zone('green'))", "objects is None: pick objects with blocks(...) or a list of records"),
+    ("require_stack(['no such block'])",
+     "'no such block' is not an object of this scene: pass records from blocks(...) or objects, or their full names"),
+    ("require_inside(blocks(), 'the table')",
+     "'the table' is not a place: use zone(color), bowl(color), zones(), bowls(), one of ['green zone with obj_id 1', "
+     f"'pink zone with obj_id 2', 'red bowl with obj_id 3'] or an area {AREAS_SAID}"),
+    ("zone()", "there is no single zone (there are 2); the zones here are ['green', 'pink']: loop over zones() to "
+               "visit only those that exist"),
+    ("bowl('green')", "there is no green bowl; the bowls here are ['red']: the only bowl is the red one, bowl() picks it"),
+    ("ball()", "there is no single ball (there are 0); the balls here are []"),
+    ("blocks(size='huge')", "size 'huge': valid: big, bigger, large, small, smaller, tiny"),
+    ("blocks(start_area='middle')",
+     "start_area 'middle': valid: top left, top right, bottom left, bottom right, outside the workspace"),
+    ("blocks_beside(blocks()[0], 'above')", "side 'above': valid: left, right, front, rear"),
+])
+def test_a_bad_argument_is_a_check_argument_error_shown_as_it_always_was(code: str, message: str) -> None:
+    """The kind is a class (:class:`CheckArgumentError`), not a prefix of the message; the text the repair
+    request quotes is, to the character, the one ``PlanError("ValueError: ...")`` showed.  Not a
+    ``ValueError``: a check's ``except ValueError`` does not catch it, as it never did."""
+    rows = [place(1, "zone", "green"), place(2, "zone", "pink"), place(3, "bowl", "red"), *tower(["red"])]
+    env, _ = relation_env(rows)
+    with pytest.raises(PlanError) as err:
+        run_code(f"try:\n    {code}\nexcept ValueError:\n    pass", env)
+    cause = err.value.__cause__
+    assert isinstance(cause, CheckArgumentError) and isinstance(cause, PlanError) and not isinstance(cause, ValueError)
+    assert str(cause) == message
+    assert describe(cause) == f"PlanError: ValueError: {message}"
+    assert describe(err.value) == f"PlanError: line 2: PlanError: ValueError: {message}"
 
 
 def test_a_call_with_missing_arguments_names_the_check_as_the_prompt_does() -> None:

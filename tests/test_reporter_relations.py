@@ -11,13 +11,16 @@ import json
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from llm_stub_server import StubLLMServer, prompt_text
 
 from capmj.agents.prompt_files import load_prompt
-from capmj.agents.report.relations.checks import CHECKS
+from capmj.agents.report.relations.checks import CHECKS, SELECTORS
 from capmj.agents.report.registry import make_reporter
 from capmj.agents.report.relations.reporter import BLIND, HOLDS_AT_START, IMPOSSIBLE, RelationsReporter
 from capmj.bench.cli import main
+from capmj.errors import PlanError, UnknownCheckError, describe
 
 SEED = 10001
 BOWLS = "put-block-into-matching-bowl"
@@ -69,6 +72,30 @@ def test_a_made_up_check_is_refused_with_the_valid_names_not_written_by_parse_fu
     repair = prompt_text(server.requests[1])
     assert "require_matching_bowls is not defined" in repair and all(c in repair for c in CHECKS)
     assert [(r["verdict"], r["source"]) for r in judged] == [(r["label"], "repair") for r in judged]
+
+
+def test_a_made_up_check_is_an_unknown_check_error_shown_as_it_always_was(server: StubLLMServer, tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """The kind is a class (:class:`UnknownCheckError`, not a ``NameError``); the repair request quotes, to
+    the character, what ``PlanError("NameError: ...")`` showed."""
+    import capmj.agents.report.relations.reporter as reporter
+
+    seen: list[BaseException] = []
+
+    def spy(exc: BaseException) -> str:
+        seen.append(exc)
+        return describe(exc)
+
+    monkeypatch.setattr(reporter, "describe", spy)
+    server.respond_with(lambda request: code(
+        MATCHING if "is not defined" in prompt_text(request) else "require_matching_bowls(blocks())"))
+    judge(tmp_path, server, "oracle")
+    error = seen[0]
+    assert isinstance(error, UnknownCheckError) and isinstance(error, PlanError) and not isinstance(error, NameError)
+    shown = (f"PlanError: NameError: require_matching_bowls is not defined; the checks are {', '.join(CHECKS)} "
+             f"and the selectors {', '.join(SELECTORS)}")
+    assert describe(error) == shown
+    assert f"# The checking code above failed: {shown}\n" in prompt_text(server.requests[1])
 
 
 def test_a_check_without_a_required_relation_is_blind(server: StubLLMServer, tmp_path: Path) -> None:

@@ -10,7 +10,9 @@ attribution (:mod:`capmj.bench.failures`) switches on that class.  Classes that 
 after their failures were already raised under a more general class keep that class's name in
 their text (``shown_as``; see :func:`describe`): the text is what the LLM is shown on a re-plan,
 what cached completions were asked with and what published records hold, so a new class must not
-change a single character of it.
+change a single character of it.  An error once raised as a PlanError with its kind written at the
+start of its message shows both names (``shown_as = "PlanError: ValueError"``): the kind is its
+class now, and its text reads as it always did.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ class CapmjError(Exception):
     """Base of every deliberate capmj error."""
 
     shown_as: ClassVar[str | None] = None
-    """The class name this error's text shows (None: its own name)."""
+    """The class name (or names, ``"PlanError: ValueError"``) this error's text shows (None: its own name)."""
 
     def __repr__(self) -> str:
         return f"{error_name(self)}({', '.join(map(repr, self.args))})"
@@ -109,6 +111,22 @@ class SandboxViolation(PlanError):
     """LLM-written code uses what the sandbox does not allow (imports, private attributes, ...)."""
 
     shown_as = "PlanError"
+
+
+class CheckArgumentError(PlanError):
+    """A relation check or selector of the ``relations`` reporter was given what it cannot read: no
+    object or place of the scene, a size, area or side it does not know.  The message names the
+    valid choices, which the repair request quotes.  Not a ``ValueError``: a check's ``except
+    ValueError`` does not catch it (it never did)."""
+
+    shown_as = "PlanError: ValueError"
+
+
+class UnknownCheckError(PlanError):
+    """A ``relations`` answer calls a name its prompt does not define; the message names the checks
+    and selectors there are.  Not a ``NameError`` (it never was)."""
+
+    shown_as = "PlanError: NameError"
 
 
 class BudgetExceeded(PlanError):

@@ -19,7 +19,7 @@ the records of :mod:`capmj.agents.report.scene_records` with the tasks' own tole
 :mod:`capmj.agents.report.relations.picks` (which also read what each check is given: a record, a list of
 records, a name, a colour word where a zone or bowl is meant, because a small model mixes them)
 and the checks here; :class:`Failures` collects what failed.  Anything a check cannot read raises
-:class:`~capmj.errors.PlanError` with the valid choices, which the reporter's repair request quotes.
+:class:`~capmj.errors.CheckArgumentError` with the valid choices, which the repair request quotes.
 """
 
 from __future__ import annotations

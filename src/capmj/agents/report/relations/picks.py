@@ -6,8 +6,8 @@ to the checks of :mod:`capmj.agents.report.relations.checks`.  This module is wh
 records.  It is forgiving where a small model's slip has one meaning (``blocks(color="big")`` is a
 size, ``b.color`` reads the key, ``zone("zone")`` and a zone colour nothing in the scene has are
 the only zone) and strict everywhere else: anything it cannot read raises
-:class:`~capmj.errors.PlanError` naming the valid choices, which the reporter's repair request
-quotes.  A pick that finds no block is noted (:attr:`Picks.empty_picks`): a relation over nothing
+:class:`~capmj.errors.CheckArgumentError` naming the valid choices, which the reporter's repair
+request quotes.  A pick that finds no block is noted (:attr:`Picks.empty_picks`): a relation over nothing
 always holds, and the holds-at-start repair request names what exists instead.
 """
 
@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from capmj.agents.report.scene_facts import AREAS
-from capmj.errors import PlanError
+from capmj.errors import CheckArgumentError
 from capmj.sim.palette import COOL, WARM
 
 __all__ = ["SELECTORS", "SIZE_WORDS", "Picks", "Record", "short"]
@@ -79,13 +79,13 @@ class Picks:
     def objs(self, value: Any, what: str = "objects") -> list[Record]:
         """The records ``value`` means: one record or name, or a list of them."""
         if value is None:
-            raise PlanError(f"ValueError: {what} is None: pick objects with blocks(...) or a list of records")
+            raise CheckArgumentError(f"{what} is None: pick objects with blocks(...) or a list of records")
         items = value if isinstance(value, (list, tuple, set, frozenset)) else [value]
         out: list[Record] = []
         for item in items:
             name = item.get("name") if isinstance(item, dict) else item
             if not isinstance(name, str) or name not in self.by_name:
-                raise PlanError(f"ValueError: {str(item)[:60]!r} is not an object of this scene: pass records "
+                raise CheckArgumentError(f"{str(item)[:60]!r} is not an object of this scene: pass records "
                                 f"from blocks(...) or objects, or their full names")
             out.append(self.by_name[name])
         return out
@@ -109,7 +109,7 @@ class Picks:
             if len(found) == 1:
                 return found[0]
         places = [r["name"] for r in self.rows if r["kind"] in PLACE_KINDS]
-        raise PlanError(f"ValueError: {str(value)[:60]!r} is not a place: use zone(color), bowl(color), zones(), "
+        raise CheckArgumentError(f"{str(value)[:60]!r} is not a place: use zone(color), bowl(color), zones(), "
                         f"bowls(), one of {places} or an area {list(AREAS)}")
 
     @staticmethod
@@ -143,7 +143,7 @@ class Picks:
             which = f"{color} {kind}" if color is not None else f"single {kind} (there are {len(found)})"
             hint = (f": the only {kind} is the {colors[0]} one, {kind}() picks it" if len(colors) == 1 else
                     f": loop over {kind}s() to visit only those that exist" if kind != "ball" else "")
-            raise PlanError(f"ValueError: there is no {which}; the {kind}s here are {colors}{hint}")
+            raise CheckArgumentError(f"there is no {which}; the {kind}s here are {colors}{hint}")
         return found[0]
 
     def blocks(self, color: Any = None, size: str | None = None, start_area: str | None = None) -> list[Record]:
@@ -153,9 +153,9 @@ class Picks:
         colors = None if color is None else {c for w in words for c in (WARM if w == "warm" else COOL if w == "cool"
                                                                         else [w])}
         if size is not None and size not in SIZE_WORDS:
-            raise PlanError(f"ValueError: size {size!r}: valid: {', '.join(SIZE_WORDS)}")
+            raise CheckArgumentError(f"size {size!r}: valid: {', '.join(SIZE_WORDS)}")
         if start_area is not None and start_area not in AREAS:
-            raise PlanError(f"ValueError: start_area {start_area!r}: valid: {', '.join(AREAS)}")
+            raise CheckArgumentError(f"start_area {start_area!r}: valid: {', '.join(AREAS)}")
         every = [r for r in self.movable if r["kind"] == "block"]
         found = [r for r in every if (colors is None or r["color"] in colors)
                  and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
@@ -176,7 +176,7 @@ class Picks:
     def blocks_beside(self, block: Any, side: str, more_than: float = 0.0) -> list[Record]:
         ref = self.objs(block, "block")[0]
         if side not in SIDES:
-            raise PlanError(f"ValueError: side {side!r}: valid: {', '.join(SIDES)}")
+            raise CheckArgumentError(f"side {side!r}: valid: {', '.join(SIDES)}")
         axis, sign = SIDES[side]
         return [r for r in self.blocks() if r["name"] != ref["name"]
                 and sign * (self.start[r["name"]]["centre"][axis] - self.start[ref["name"]]["centre"][axis]) > more_than]

@@ -57,7 +57,7 @@ from capmj.agents.report.records import RecordsReporter
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.agents.report.scene_records import INVENTORY_KEYS, records, records_text
 from capmj.agents.report.verdict import CheckRun
-from capmj.errors import PlanError, describe
+from capmj.errors import PlanError, UnknownCheckError, describe
 
 __all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "RelationsReporter"]
 
@@ -131,8 +131,8 @@ class RelationsReporter(RecordsReporter):
             code = extract_code(text)
             missing = [m[0] for m in undefined_calls(code, known)]
             if missing:
-                raise PlanError(f"NameError: {', '.join(missing)} is not defined; the checks are {', '.join(CHECKS)} "
-                                f"and the selectors {', '.join(SELECTORS)}")
+                raise UnknownCheckError(f"{', '.join(missing)} is not defined; the checks are {', '.join(CHECKS)} "
+                                        f"and the selectors {', '.join(SELECTORS)}")
             code = session.prepare(code, dict.fromkeys(known), parent=call)  # drops benign imports only
             session.record(call, "code", code)
         except PlanError as exc:
