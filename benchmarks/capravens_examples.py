@@ -70,10 +70,10 @@ from capmj.agents.prompt_files import object_names
 from capmj.agents.report.text_env import reporter_env
 from capmj.agents.sandbox import PROVIDED_NAMES, SandboxBudget, run_code
 from capmj.errors import PlanError, PortingDifference, UnknownObjectError, error_name
+from capmj.runner import start_episode
 from capmj.sim.objects import KINDS, ObjectSpec, resting_z
 from capmj.sim.palette import COLOR_NAMES
-from capmj.sim.world import World
-from capmj.tasks.protocol import Scene, make_scene
+from capmj.tasks.protocol import Scene
 from capmj.tasks.registry import get_task
 from capmj.tasks.spawn import Resample, Spawner
 
@@ -233,15 +233,10 @@ class _PlainTask:
 
 def context_for(ex: Example, seed: int) -> EpisodeContext:
     names = context_names(ex)
-    if names:
-        specs = build_scene(names, seed)
-        scene, task = Scene(specs, ex.query[1:].strip()), _PlainTask()
-    else:
-        task = get_task(DEFAULT_TASK)
-        scene = make_scene(task, seed)
-    world = World(scene.objects)
-    world.settle()
-    return EpisodeContext(task, seed, scene, world)  # type: ignore[arg-type]
+    if not names:
+        return start_episode(get_task(DEFAULT_TASK), seed)
+    scene = Scene(build_scene(names, seed), ex.query[1:].strip())
+    return start_episode(_PlainTask(), seed, scene=scene)  # type: ignore[arg-type]
 
 
 # ------------------------------------------------------------------------------------------ answers

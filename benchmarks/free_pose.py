@@ -18,9 +18,7 @@ import numpy as np
 
 from capmj.agents.api.footprints import FREE_CLEARANCE, FREE_GRID_STEP
 from capmj.agents.api.planner_api import PlannerAPI
-from capmj.agents.base import EpisodeContext
-from capmj.sim.world import World
-from capmj.tasks.protocol import make_scene
+from capmj.runner import start_episode
 from capmj.tasks.registry import get_task, resolve
 
 
@@ -32,12 +30,8 @@ def main(argv: list[str] | None = None) -> int:
     names = resolve(args.tasks)
     scenes = []
     for k, name in enumerate(names):
-        task, seed = get_task(name), 10001 + 2 * k
-        scene = make_scene(task, seed)
-        world = World(scene.objects)
-        world.settle()
-        fns = PlannerAPI(EpisodeContext(task, seed, scene, world)).functions()
-        scenes.append((fns, len(scene.objects)))
+        ctx = start_episode(get_task(name), 10001 + 2 * k)
+        scenes.append((PlannerAPI(ctx).functions(), len(ctx.scene.objects)))
     queries = [dict(), dict(area=(0.5, 0.0, 0.75, 0.5)), dict(targ=[0.5, 0.0], r=0.03)]
     times, objects = [], []
     for i in range(args.queries):

@@ -33,27 +33,23 @@ from capmj.tasks.registry import resolve
 
 def run_scene(task_name: str, seed: int, states: tuple[str, ...]) -> list[dict]:
     """Score the perceiver on one scene in each requested state."""
-    from capmj.agents.base import EpisodeContext
     from capmj.agents.oracle import OracleAgent
     from capmj.agents.api.perception_audit import true_objects
     from capmj.perception import ClassicalPerceiver, RGBDBundle
     from capmj.perception.score import score
     from capmj.sim.cameras import CameraRig
+    from capmj.runner import start_episode
     from capmj.sim.robot import HOME_QPOS
-    from capmj.sim.world import World
-    from capmj.tasks.protocol import make_scene
     from capmj.tasks.registry import get_task
 
-    task = get_task(task_name)
-    scene = make_scene(task, seed)
-    world = World(scene.objects)
-    world.settle()
+    ctx = start_episode(get_task(task_name), seed)
+    world = ctx.world
     perceiver = ClassicalPerceiver()
     rows = []
     with CameraRig(world) as rig:
         for state in states:
             if state == "final":
-                OracleAgent().act(EpisodeContext(task, seed, scene, world))
+                OracleAgent().act(ctx)
                 # Pictures are taken with the arm out of view, as in Ravens: the oracle leaves the
                 # tool 0.2 m over the table, where it would hide (and look like) objects.
                 world.set_arm(np.array(HOME_QPOS))

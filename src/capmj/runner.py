@@ -1,5 +1,6 @@
 """Run one episode: :func:`run_episode` (task, seed, agent) -> :class:`EpisodeResult`;
-:func:`record_episode` runs it and logs it to an ``.rrd`` with :class:`capmj.log.recorder.RerunRecorder`.
+:func:`record_episode` runs it and logs it to an ``.rrd`` with :class:`capmj.log.recorder.RerunRecorder`;
+:func:`start_episode` is the set-up every episode shares (the bench's, the dm_env's, the judge's).
 
 The runner never raises for an episode's own failure: a task whose scene cannot be generated, a
 world that does not compile, an agent that raises or runs out of budget — each becomes a recorded,
@@ -20,9 +21,9 @@ from capmj.record import ArrayFrames, NullRecorder, Recorder
 from capmj.records import Drift, EpisodeResult, LLMNotes, PerceptionNotes
 from capmj.sim.world import World
 from capmj.tasks.predicates import ravens_reward
-from capmj.tasks.protocol import Task, make_scene
+from capmj.tasks.protocol import Scene, Task, make_scene
 
-__all__ = ["FRAME_EVERY_STEPS", "EpisodeResult", "record_episode", "run_episode"]
+__all__ = ["FRAME_EVERY_STEPS", "EpisodeResult", "record_episode", "run_episode", "start_episode"]
 
 FRAME_EVERY_STEPS = 25  # 20 Hz of simulated time in logs
 
@@ -44,22 +45,21 @@ def _attach_frames(world: World, recorder: Recorder) -> None:
     world.add_frame_listener(emit, FRAME_EVERY_STEPS)
 
 
-def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = None,
-                recorder: Recorder | None = None) -> EpisodeResult:
-    """Generate the scene of (task, seed), let the agent act, judge the settled final state."""
+def start_episode(task: Task, seed: int, *, scene: Scene | None = None, budget: Budget | None = None,
+                  recorder: Recorder | None = None) -> EpisodeContext:
+    """Set up the episode of (task, seed) and return the agent's context: the scene
+    (``make_scene(task, seed)``, or ``scene`` when given), its world compiled and settled, the
+    recorder (if any) attached to the world and told the goal, then :class:`EpisodeContext`, which
+    snapshots this state as the episode's start.
+
+    Everything that plays or stages an episode starts here, so they all start from the same state.
+    Raises what the task or MuJoCo raise (:func:`run_episode` records it as the episode's failure);
+    a recorder that cannot attach is told so and the episode goes on.
+    """
     rec = recorder or NullRecorder()
-    t0 = time.perf_counter()
-    name = getattr(task, "name", repr(task))
-    model = getattr(agent, "model", None)
-    try:
-        scene = make_scene(task, seed)
-        world = World(scene.objects)
-        world.settle()
-    except Exception as exc:  # noqa: BLE001 - a broken task fails its own episode only
-        rec.text("verdict", f"FAILED before acting: {describe(exc)}")
-        kind, why = error_facts(exc)
-        return EpisodeResult(name, seed, agent.name, model, False, 0.0, 0.0, 0, 0, 0.0,
-                             time.perf_counter() - t0, describe(exc), error_type=kind, error_status=why)
+    scene = make_scene(task, seed) if scene is None else scene
+    world = World(scene.objects)
+    world.settle()
     if not isinstance(rec, NullRecorder):
         _attach_frames(world, rec)
         try:
@@ -67,7 +67,25 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
         except Exception as exc:  # noqa: BLE001 - logging must never change the episode's outcome
             rec.text("log_errors", f"attach failed: {describe(exc)}")
     rec.text("goal", scene.goal)
-    ctx = EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
+    return EpisodeContext(task, seed, scene, world, budget=budget, recorder=rec)
+
+
+def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = None,
+                recorder: Recorder | None = None) -> EpisodeResult:
+    """Set up the episode of (task, seed) (:func:`start_episode`), let the agent act, judge the
+    settled final state."""
+    rec = recorder or NullRecorder()
+    t0 = time.perf_counter()
+    name = getattr(task, "name", repr(task))
+    model = getattr(agent, "model", None)
+    try:
+        ctx = start_episode(task, seed, budget=budget, recorder=rec)
+    except Exception as exc:  # noqa: BLE001 - a broken task fails its own episode only
+        rec.text("verdict", f"FAILED before acting: {describe(exc)}")
+        kind, why = error_facts(exc)
+        return EpisodeResult(name, seed, agent.name, model, False, 0.0, 0.0, 0, 0, 0.0,
+                             time.perf_counter() - t0, describe(exc), error_type=kind, error_status=why)
+    scene, world = ctx.scene, ctx.world
     error: str | None = None
     error_type: str | None = None
     status: str | None = None
@@ -87,7 +105,7 @@ def run_episode(task: Task, seed: int, agent: Agent, *, budget: Budget | None = 
     else:
         success, progress, diags = verdict.success, verdict.progress, verdict.diagnostics
     llm = ctx.notes.get("llm")
-    perception = ctx.notes.get("perception")  # rgbd mode: capmj.agents.perception_audit
+    perception = ctx.notes.get("perception")  # rgbd mode: capmj.agents.api.perception_audit
     poses: dict[str, tuple[float, ...]]
     drift: Drift | None
     try:

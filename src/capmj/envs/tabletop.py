@@ -2,11 +2,11 @@
 
 Why it is built this way:
 
-* **One simulation path.**  ``reset`` builds the episode exactly as :func:`capmj.runner.run_episode`
-  does (``make_scene`` -> ``World`` -> ``settle`` -> :class:`EpisodeContext`), and ``step`` calls
-  ``EpisodeContext.pick_and_place``, the budgeted primitive the bench's agents use.  Nothing else
-  steps physics between two actions, so the oracle driven through this env ends in the bench's
-  final state, bit for bit (tested).
+* **One simulation path.**  ``reset`` sets the episode up with the bench's own
+  :func:`capmj.runner.start_episode` (``make_scene`` -> ``World`` -> ``settle`` ->
+  :class:`EpisodeContext`), and ``step`` calls ``EpisodeContext.pick_and_place``, the budgeted
+  primitive the bench's agents use.  Nothing else steps physics between two actions, so the oracle
+  driven through this env ends in the bench's final state, bit for bit (tested).
 * **Actions are Ravens' ``pose0``/``pose1``** as two float64 vectors ``(x, y, z, yaw)``: ``pick``
   (z and yaw are not used by the round suction cup: it descends until it touches) and ``place``
   (the gripped object's centre; the descent stops at first contact; ``yaw`` is the object's final
@@ -24,7 +24,7 @@ Why it is built this way:
 * **Objects as the planner API knows them**: ``objects`` is one row per object, ``(obj_id, kind,
   colour, size, x, y, z, yaw)`` (codes: indices into :data:`OBJECT_CODES`; padded rows have obj_id
   0).  ``perception="state"`` (the default) reads them from the simulator; ``perception="rgbd"``
-  from the cameras — the bench's ``--perception rgbd`` view (:mod:`capmj.agents.perceived`): the
+  from the cameras — the bench's ``--perception rgbd`` view (:mod:`capmj.agents.api.perceived`): the
   scene is perceived at reset and after every step, tracked ids survive moves, and the perception
   error is scored against the truth for the record (:attr:`TabletopEnv.perception`, never part of
   the observation).  The pick-and-place itself is the same primitive in both modes.
@@ -44,6 +44,7 @@ from capmj.agents.base import Budget, EpisodeContext
 from capmj.errors import AgentError, BudgetExceeded, ConfigError
 from capmj.perception.plugins import STATE, check_mode, load_perceiver
 from capmj.records import PerceptionNotes
+from capmj.runner import start_episode
 from capmj.sim.motion import PrimitiveResult
 from capmj.sim.objects import BLOCK_SIZES, KINDS
 from capmj.sim.palette import COLOR_NAMES
@@ -53,7 +54,7 @@ from capmj.sim.cameras import CameraRig, IMAGE_H, IMAGE_W, VIEW_CAMERAS
 from capmj.sim.pose import mat_yaw
 from capmj.sim.scene import HEIGHTMAP_PIXEL
 from capmj.sim.world import World
-from capmj.tasks.protocol import Scene, Task, Verdict, make_scene
+from capmj.tasks.protocol import Scene, Task, Verdict
 
 POSE_FIELDS = ("x", "y", "z", "yaw")
 ACTION_LOW = np.array([WORKSPACE.xmin, WORKSPACE.ymin, WORKSPACE.zmin, -math.pi])
@@ -129,9 +130,9 @@ class TabletopEnv(dm_env.Environment):
         if perception is not None:  # the keyword overrides the config's mode
             self.config = replace(self.config, perception=perception)
         self._seen: Any = None
-        """rgbd mode: the episode's :class:`~capmj.agents.perceived.PerceivingContext`."""
+        """rgbd mode: the episode's :class:`~capmj.agents.api.perceived.PerceivingContext`."""
         self._perceived: Any = None
-        """rgbd mode: the episode's :class:`~capmj.agents.perceived.PerceivedScene`."""
+        """rgbd mode: the episode's :class:`~capmj.agents.api.perceived.PerceivedScene`."""
         self.max_steps = step_limit(task, self.config)
         self._next_seed = int(seed)
         self._stride = int(seed_stride)
@@ -191,11 +192,8 @@ class TabletopEnv(dm_env.Environment):
             self._next_seed = int(seed) + self._stride
         self.close()
         self.seed = int(seed)
-        self.scene = make_scene(self.task, self.seed)
-        self.world = World(self.scene.objects)
-        self.world.settle()
-        self._ctx = EpisodeContext(self.task, self.seed, self.scene, self.world,
-                                   budget=Budget(max_primitives=self.max_steps))
+        self._ctx = start_episode(self.task, self.seed, budget=Budget(max_primitives=self.max_steps))
+        self.scene, self.world = self._ctx.scene, self._ctx.world
         if self.config.perception != STATE:
             from capmj.agents.api.perceived import PerceivedScene, PerceivingContext
             from capmj.agents.api.perception_audit import PerceptionAudit

@@ -14,10 +14,12 @@ import json
 from dataclasses import asdict, dataclass
 from typing import Any, Mapping
 
-from capmj.agents.base import JUDGE_SETTLE_STEPS
+from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
+from capmj.record import Recorder
+from capmj.runner import start_episode
 from capmj.sim.state import Pose, SceneState
 from capmj.sim.world import World, WorldSnapshot
-from capmj.tasks.protocol import Scene, Task, Verdict, make_scene
+from capmj.tasks.protocol import Scene, Task, Verdict
 
 __all__ = ["HARD_KINDS", "KINDS", "NEGATIVE_KINDS", "JudgeCase", "Stage", "layout_of", "set_digest"]
 
@@ -93,18 +95,24 @@ def set_digest(cases: list[JudgeCase]) -> str:
 class Stage:
     """The world of one (task, seed), reusable for any number of layouts.
 
-    Built exactly as an episode starts (scene of the seed, compiled world, initial settle); the
-    initial state is snapshotted, and :meth:`realise` returns to it before placing a layout, which
-    is the same physics as a fresh world (MuJoCo restores the full integration state).
+    Set up as every episode is (:func:`capmj.runner.start_episode`: scene of the seed, compiled
+    world, initial settle); the initial state is snapshotted, and :meth:`realise` returns to it
+    before placing a layout, which is the same physics as a fresh world (MuJoCo restores the full
+    integration state).
     """
 
     def __init__(self, task: Task, seed: int) -> None:
         self.task = task
         self.seed = seed
-        self.scene: Scene = make_scene(task, seed)
-        self.world = World(self.scene.objects)
-        self.world.settle()
+        start = start_episode(task, seed)
+        self.scene: Scene = start.scene
+        self.world: World = start.world
         self.initial: WorldSnapshot = self.world.snapshot()
+
+    def context(self, recorder: Recorder | None = None) -> EpisodeContext:
+        """A fresh agent's context over the world as it is now (after :meth:`restart`: the
+        episode's start), as an agent or a reporter gets it."""
+        return EpisodeContext(self.task, self.seed, self.scene, self.world, recorder=recorder)
 
     def restart(self) -> None:
         """Back to the episode's initial state (arm at home, objects at their spawn poses)."""

@@ -1,6 +1,6 @@
 """Run a reporter over labelled cases: one plain record per judged state.
 
-The reporter is the closed loop's own (:mod:`capmj.agents.reporter`), called exactly as
+The reporter is the closed loop's own (:mod:`capmj.agents.report`), called exactly as
 :class:`~capmj.agents.llm_agent.LLMAgent` calls it after a plan: an :class:`EpisodeContext` over
 the episode's world, a fresh :class:`LMPSession` with the planner API and the LMP budget, the
 scene settled.  Only the state differs: instead of wherever a plan ended, the case's layout is
@@ -114,7 +114,7 @@ class Judge:
         stage = self._stage_for(case)
         stage.restart()
         rec = self._recorder(case, stage)
-        ctx = EpisodeContext(stage.task, case.seed, stage.scene, stage.world, recorder=rec)
+        ctx = stage.context(recorder=rec)
         reporter = make_reporter(self.config.reporter, self.config.prompts_dir, self.config.reporter_prompt) \
             if self.config.reporter != "predicate" else None
         out: dict[str, Any] = {

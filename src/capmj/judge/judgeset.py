@@ -27,7 +27,6 @@ from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from capmj.agents.base import EpisodeContext
 from capmj.agents.oracle import OracleAgent
 from capmj.judge import perturb
 from capmj.judge.cases import HARD_KINDS, KINDS, JudgeCase, Stage, layout_of, layout_rows
@@ -109,7 +108,7 @@ def build_cases(task: Task, seed: int, kinds: Iterable[str] = KINDS) -> tuple[li
     world = stage.world
     movable = world.movable_ids
     try:
-        OracleAgent().act(EpisodeContext(task, seed, stage.scene, world))
+        OracleAgent().act(stage.context())
     except Exception as exc:  # noqa: BLE001 - an unsolvable seed is skipped, with the reason
         return [], [Skip(name, seed, "oracle", f"oracle failed: {type(exc).__name__}: {exc}")]
     # the oracle's layout settled once on the initial world: the positive, and what perturbations start from
