@@ -1,9 +1,7 @@
 """Whether a model-written check can tell one scene from another: what it reads and compares.
 
 A check over the scene's records (``prompts/reporter_records.py``) is evidence about the robot's
-work only if its verdict depends on what acting changes.  With the shared 1.5B model, for 86 of the
-99 judge episodes with both an achieved and a failed state (20 tasks × 5 test seeds,
-``goalcheck``), the verdict was the same for both states.  Two kinds of check are blind by their
+work only if its verdict depends on what acting changes.  Two kinds of check are blind by their
 text, and this module finds both without running anything (the code is read with :mod:`ast`):
 
 * it reads none of the **measured keys** (:data:`MEASURED_KEYS`: ``area``, ``inside``, ``level`` ...,
@@ -16,7 +14,8 @@ text, and this module finds both without running anything (the code is read with
   them, and a repair request that lists them says nothing of the result.
 
 :func:`blind_problem` states the first such problem as a sentence the repair request can quote,
-with the values the key really has, so the model can mend the comparison it wrote.
+with the values the key really has, so the model can mend the comparison it wrote.  Why this gate
+exists: ``docs/judge.md``, "Why each gate exists" (``blind_check``).
 """
 
 from __future__ import annotations

@@ -6,10 +6,7 @@ must itself derive positions, containment and stacking.  ``--reporter-prompt che
 :class:`CheckedReporter`: one request with ``prompts/reporter_checked.txt``, which lists the facts
 :mod:`capmj.agents.report.scene_facts` measured with the tasks' own rules (per object: centre, quarter of
 the table, what it rests on, the zone or bowl it is in, tilt) and asks for ``judge``, ``reason``
-and ``wrong`` — the full names of the objects that break the goal.  Why: the shared 1.5B model's
-checking code agreed with the predicate on 43-55 % of attempts; deriving the facts was where it
-failed, and a fact list (~150 characters per object) is also shorter than the 5.3 kB of
-``parse_completion``'s examples.
+and ``wrong`` — the full names of the objects that break the goal.
 
 The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.report.verdict.parse_verdict`).
 An answer without a verdict gets one repair request in the same conversation; still none: unknown.
@@ -17,11 +14,9 @@ Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — n
 since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
 real objects?) is :func:`capmj.agents.report.confidence.assess`, applied to either prompt's verdict.
 
-A verdict whose reason is the prompt file's own example word for word is marked ``doubt="copies_example"`` (low
-confidence, ``copies_example``).  Why: 22 of the shared 1.5B model's 39 answers on the judge's
-seed-10001 subset were the example ("the red block rests on the table, not on the blue block",
-naming obj_id 3) whatever the state, right on 12, and 15 of them counted as high-confidence
-because obj_id 3 is a movable object in many scenes: the ``careful`` loop re-planned on them.
+A verdict whose reason is the prompt file's own example word for word is marked
+``doubt="copies_example"`` (low confidence): it says nothing of the scene.  Why this prompt and
+this gate exist: ``docs/judge.md``, "Why each gate exists".
 """
 
 from __future__ import annotations

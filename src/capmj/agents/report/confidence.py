@@ -6,23 +6,21 @@ A verdict is *high-confidence* when it is consistent in itself and with the scen
 * ``False`` naming at least one real object the robot can move (resolved by
   :func:`capmj.agents.report.scene_facts.resolve_name`).
 
-Otherwise it is *low-confidence*, for one of the reasons of :data:`LOW_CONFIDENCE`.  Why these
-rules: a "not achieved" that cannot say which object is wrong gives a re-plan nothing to fix, and a
-small model's unfounded "no" was exactly what undid reached goals (issue #26: with the shared 1.5B
-model, H and J reached the goal, the reporter said no, the re-plan undid it).  Naming only fixed
+Otherwise it is *low-confidence*, for one of the reasons of :data:`LOW_CONFIDENCE`: a "not
+achieved" that cannot say which object is wrong gives a re-plan nothing to fix; naming only fixed
 objects (zones, bowls: the robot cannot move them, so they are where they started) contradicts the
-facts, and so does an "achieved" that lists wrong objects.  A ``direct`` verdict (asked as a
-plain question after the model's checking code failed twice) is low-confidence whatever it says:
-it is the ``records`` prompt's fallback to the ``checked`` question, whose verdicts that named a
-movable object agreed with the predicate on 53-56 % of the judge set's states with the shared 1.5B
-model (seeds 10001 and 10003), against 77-80 % for the checks ``records`` ran; acting on it would
-re-plan achieved states at chance.  A verdict whose reason copies the prompt's own example
-(``Report.doubt``, set by :class:`~capmj.agents.report.checked.CheckedReporter`) is no evidence
-about the scene either, nor is a check that says "achieved" of the scene the robot started from
-(:class:`~capmj.agents.report.goalcheck.GoalCheckReporter`): no task's goal holds there, nor is a
-check whose text cannot depend on the scene (``blind_check``).  The ``careful`` loop
-(:mod:`capmj.agents.llm_agent.loop_policy`) keeps the state instead of re-planning on a low-confidence
-verdict; ``judge`` records the confidence of every verdict so its accuracy can be measured apart.
+facts, and so does an "achieved" that lists wrong objects.  A ``direct`` verdict (asked as a plain
+question after the model's checking code failed twice: the ``records`` prompt's fallback to the
+``checked`` question) is low-confidence whatever it says.  So is a verdict the reporter itself
+doubts (``Report.doubt``): a reason copying the prompt's own example
+(:class:`~capmj.agents.report.checked.CheckedReporter`), a check that says "achieved" of the scene
+the robot started from, where no task's goal holds
+(:class:`~capmj.agents.report.goalcheck.GoalCheckReporter`), a check whose text cannot depend on the
+scene (``blind_check``), and the ``relations`` gates' keys.  The ``careful`` loop
+(:mod:`capmj.agents.llm_agent.loop_policy`) keeps the state instead of re-planning on a
+low-confidence verdict; ``judge`` records the confidence of every verdict so its accuracy can be
+measured apart.  Why each reason exists: ``docs/judge.md``, "Why each gate exists", and
+``docs/llm.md`` (the loop policies).
 """
 
 from __future__ import annotations

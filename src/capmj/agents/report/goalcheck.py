@@ -1,37 +1,26 @@
 """The ``goalcheck`` text-reporter prompt: the model writes the goal's check before seeing the
 result, capmj runs it on the measured final scene and on the scene the robot started from.
 
-Why, from the shared 1.5B model's ``records`` answers on the judge's subsets (seeds 10001 and
-10003, 79 states): for 28 of the 39 episodes with both an achieved and a failed state judged, the
-verdict was the same for both (23 of them "not achieved" for both), and 14 of the 25 wrong checks
-set ``judge`` to a constant with no test at all; others compared a key with a word
-(``b["inside"] != "zone"``).  The model was shown the measured records and still wrote a check
-that did not look at them.
-
-So ``goalcheck`` asks for what the check is really made of, the goal and the objects, and keeps the
-result out of the question:
-
 * the question lists only the keys acting cannot change (``name``, ``kind``, ``color``, ``size``:
   :data:`capmj.agents.report.scene_records.INVENTORY_KEYS`) under the ``records`` prompt's documentation of
   every key (``prompts/reporter_records.py``, the same file: one description of the records);
 * the check runs on the full records of the settled final scene, which gives the verdict;
-* it runs again on the records of the start scene, where no task's goal holds (checked for the 20
-  tasks × 5 test seeds).  A check that says "achieved" there tests nothing of the state: the
-  answer gets the repair request with that fact, and if the repaired check says so again its
-  verdict is kept but doubted (``holds_at_start``, low-confidence: the ``careful`` loop does not act
-  on it).  A check that *fails* on the start scene is not held against it (``[...][0]`` of the blocks
-  in a zone that is empty at the start).
+* it runs again on the records of the start scene, where no task's goal holds.  A check that says
+  "achieved" there tests nothing of the state: the answer gets the repair request with that
+  fact, and if the repaired check says so again its verdict is kept but doubted
+  (``holds_at_start``, low-confidence: the ``careful`` loop does not act on it).  A check that
+  *fails* on the start scene is not held against it (``[...][0]`` of the blocks in a zone that is
+  empty at the start).
 * before that, its code is read (:func:`capmj.agents.report.check_reads.blind_problem`): a check that
   reads none of the keys acting changes, or compares one with a value no record can have
   (``b["inside"] != "zone"``), gives one verdict whatever the scene.  The repair request names the
   fault and the values the key has; still blind after it, the verdict is kept but doubted
   (``blind_check``).
 
-A consequence that makes the judge affordable: every state of one episode gets the same question,
-so with ``--llm-cache`` the model is asked once per (task, seed), not once per state.
-
-The start scene's records are read from the simulator's initial state, as ``start_area`` is
-(:meth:`~capmj.agents.report.records.RecordsReporter.start` keeps both).
+Every state of one episode gets the same question, so with ``--llm-cache`` the model is asked once
+per (task, seed), not once per state.  The start scene's records are read from the simulator's
+initial state, as ``start_area`` is (:meth:`~capmj.agents.report.records.RecordsReporter.start`
+keeps both).  Why each gate exists: ``docs/judge.md``, "Why each gate exists".
 """
 
 from __future__ import annotations

@@ -1,40 +1,22 @@
 """The ``records`` text-reporter prompt: capmj binds the measured facts as records, the model
 writes checking code over them, and the code runs in the sandbox.
 
-Why, from the shared 1.5B model's answers on the judge's 39-state subset:
+The facts of :mod:`capmj.agents.report.scene_facts` become a Python list of dicts
+(:mod:`capmj.agents.report.scene_records`), the prompt (``prompts/reporter_records.py``) documents
+the keys and shows three short checks, and the model writes code that sets ``judge``, ``reason``
+and ``wrong``.  The code runs in the sandbox like every other model-written code
+(:func:`capmj.agents.report.verdict.check`), with one repair request on failure.  Still no
+verdict: the ``checked`` question (:class:`~capmj.agents.report.checked.CheckedReporter`, the same
+measured facts, a literal answer parsed and never run) is asked as the ``direct`` source, never
+the ``thesis`` direct prompt (it asks the model to derive the facts again from poses).  A
+``direct`` verdict is recorded and scored, but low-confidence
+(:func:`capmj.agents.report.confidence.assess`): the ``careful`` loop does not act on it.
 
-* ``thesis`` (``parse_completion``) makes the model derive every fact from raw poses: containment,
-  stacking, sizes.  Its checking code agreed with the predicate on 43-55 % of attempts.
-* ``checked`` shows the measured facts as text and asks for a literal verdict.  Balanced accuracy
-  0.54, and the answers show why: 19 of 20 "not achieved" verdicts were the prompt's own example
-  copied word for word.  With that example removed the model still wrote *code* over the facts
-  (``if facts[1]['centre'] != ...``), because a code model reads the system prompt's "continue the
-  Python file" literally, and its verdicts flipped to "not achieved" for all 14 states asked.
-
-So ``records`` meets the model where it is: the facts of :mod:`capmj.agents.report.scene_facts` become a
-Python list of dicts (:mod:`capmj.agents.report.scene_records`), the prompt
-(``prompts/reporter_records.py``) documents the keys and shows three short checks, and the model
-writes code that sets ``judge``, ``reason`` and ``wrong``.  The code runs in the sandbox like every
-other model-written code (:func:`capmj.agents.report.verdict.check`), with one repair request
-on failure.  Still no verdict: the ``checked`` question (:class:`~capmj.agents.report.checked.CheckedReporter`,
-the same measured facts, a literal answer parsed and never run) is asked as the ``direct`` source.
-Why: on the judge's 40-state subset (seeds 10001 and 10003) 9-14 states ended unknown, every one
-because the checking code failed twice (a line cut at the copy stop, an import, a wrong index),
-while ``checked`` reached a verdict on every state it was asked.  Not the ``thesis`` direct prompt:
-it asks the model to derive the facts again from poses, which is what this prompt exists to avoid.
-A ``direct`` verdict is recorded and scored, but low-confidence (:func:`capmj.agents.report.confidence.assess`):
-the ``careful`` loop does not act on it.
-
-The commonest failure was an answer that began by writing the records out again
-(``objects = [`` cut at the copy stop, then a syntax error); its repair request says so in words
-(:data:`COPIED_RECORDS_HINT`) instead of only quoting the error the model had repeated.
-
-The repair request samples at :data:`REPAIR_TEMPERATURE` with a seed derived from the question: at
-temperature 0 the 1.5B model answered the repair request with its failed answer byte for byte
-(an import, or the records list copied out), so the repair could not succeed.  The prompt's stop
-sequences also cut an answer that starts copying the records out (``\n    {'name': ``), which
-otherwise ran to the token limit (512 tokens with `--llm-max-tokens 512`, ~45 s on the shared
-machine) before failing.
+The repair request of an answer that began by writing the records out again (``objects = [``)
+says so in words (:data:`COPIED_RECORDS_HINT`).  It samples at :data:`REPAIR_TEMPERATURE` with a
+seed derived from the question, so it can differ from the failed answer and still be repeated.
+The prompt's stop sequences cut an answer that starts copying the records out
+(``\n    {'name': ``).  Why each of these exists: ``docs/judge.md``, "Why each gate exists".
 """
 
 from __future__ import annotations

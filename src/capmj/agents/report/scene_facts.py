@@ -1,11 +1,9 @@
-"""Scene facts capmj computes for a reporter, so that a small model only compares them with the goal.
+"""Scene facts capmj computes for a reporter, so that a model only compares them with the goal.
 
-Why: with the thesis's reporter (``parse_completion``) the model has to derive every fact itself —
+With the thesis's reporter (``parse_completion``) the model has to derive every fact itself —
 write code that reads poses, knows a zone's size and a bowl's radius, and tests containment and
-stacking.  The shared 1.5B model got that wrong so often that its verdicts agreed with the task
-predicate on only 43-55 % of attempts.  The ``checked`` reporter prompt
-(:mod:`capmj.agents.report.checked`) instead shows one line of *measured* facts per object and
-asks only whether they match the goal.
+stacking.  The ``checked`` reporter prompt (:mod:`capmj.agents.report.checked`) instead shows one
+line of *measured* facts per object and asks only whether they match the goal.
 
 Each fact uses capmj's own rule, the one the task predicates use (:mod:`capmj.tasks.predicates`):
 a zone holds an object whose centre lies inside the zone's turned square

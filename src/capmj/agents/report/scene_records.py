@@ -1,10 +1,9 @@
 """The measured scene as Python records, for the ``records`` reporter's checking code.
 
 :mod:`capmj.agents.report.scene_facts` measures each object with the tasks' own rules; this module turns
-those facts into one plain ``dict`` per object, the shape a small code model reads and filters
-without help (the shared 1.5B model, asked for a verdict over facts shown as text, started writing
-``facts[1]['centre'] != ...`` of its own accord).  The records are built fresh for every run of
-checking code, so code that mutates them cannot change what a later run sees.
+those facts into one plain ``dict`` per object, the shape a code model reads and filters without
+help.  The records are built fresh for every run of checking code, so code that mutates them cannot
+change what a later run sees.
 
 Keys (``RECORD_KEYS``, documented to the model in ``prompts/reporter_records.py``):
 ``name``, ``kind``, ``color``, ``size`` (blocks; else None), ``area`` (quarter of the table),

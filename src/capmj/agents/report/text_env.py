@@ -1,10 +1,9 @@
 """What the text reporter's checking code finds already defined, so a dropped line cannot break it.
 
-A real 1.5B model copying a ``parse_completion`` example often dropped the example's first line
-(``poses = get_obj_pos_dict()``) and then failed with ``NameError: poses``, or called a ``size``
-helper the example had defined inline and sent ``parse_function`` to invent it.  The reporter
-therefore runs its code in an environment that pre-binds everything its examples use, computed
-once from the settled scene it judges:
+The reporter runs its code in an environment that pre-binds everything the examples of
+``prompts/parse_completion.py`` use, computed once from the settled scene it judges, so an answer
+that copies an example without its first line (``poses = get_obj_pos_dict()``) or calls a helper
+the example defined inline still runs (why: ``docs/judge.md``, "Why each gate exists"):
 
 ``poses``          ``{name: ([x, y, z], [roll, pitch, yaw])}`` (= ``get_obj_pos_dict()``); also bound
                    as ``object_positions``, the name CapRavens' checking code reads it under;

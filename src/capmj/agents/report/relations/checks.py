@@ -1,11 +1,7 @@
 """Pre-bound relation checks over a measured scene: what the ``relations`` reporter's code calls.
 
-Why: with the shared 1.5B model, checks written from scratch over the scene records
-(``records``/``goalcheck``) were wrong in the plumbing more often than in the goal: a name used
-before it was set, ``judge`` set to a constant, a key compared with a word no record has, a level
-list compared with the wrong range.  86 of 99 judge episodes got the same verdict for the achieved
-and the failed state.  Here the model only says *which* relations the goal asks for, as calls such
-as ``require_inside(blocks(color="red"), zone("green"))``; each call measures its relation on the
+The model only says *which* relations the goal asks for, as calls such as
+``require_inside(blocks(color="red"), zone("green"))``; each call measures its relation on the
 records and, when it fails, records a sentence and the names of the objects that break it.  The
 verdict is "achieved" exactly when no call failed, and ``wrong`` is the union of the names, so a
 "not achieved" always names objects.
@@ -17,8 +13,8 @@ the records of :mod:`capmj.agents.report.scene_records` with the tasks' own tole
 
 :func:`relation_env` builds the names a check may use for one scene: the selectors of
 :mod:`capmj.agents.report.relations.picks` (which also read what each check is given: a record, a list of
-records, a name, a colour word where a zone or bowl is meant, because a small model mixes them)
-and the checks here; :class:`Failures` collects what failed.  Anything a check cannot read raises
+records, a name, a colour word where a zone or bowl is meant) and the checks here;
+:class:`Failures` collects what failed.  Anything a check cannot read raises
 :class:`~capmj.errors.CheckArgumentError` with the valid choices, which the repair request quotes.
 """
 
@@ -102,10 +98,8 @@ class Failures:
         """The groups of objects required both as one tower and in layers of several blocks.
 
         No scene passes both, and the prompt says which one a structure is ("a structure with
-        several blocks in a layer is require_layers"): the 1.5B model wrote "a 9-4-1 pyramid in the
-        zone" as ``require_stack(blocks, zone())`` with ``require_layers(blocks, [9, 4, 1])`` and kept
-        the tower after the repair request said so.  :func:`relation_env` can read such a tower as its
-        place only (``layered``)."""
+        several blocks in a layer is require_layers"), so :func:`relation_env` can read such a tower
+        as its place only (``layered``)."""
         towers = {names for relation, names, _ in self.demands if relation == "stack" and len(names) > 1}
         return frozenset(names for relation, names, counts in self.demands
                          if relation == "layers" and names in towers and max(counts, default=0) > 1)

@@ -1,19 +1,12 @@
 """Relations a goal names that a relation check never asks for: the other half of a partial check.
 
-Why, from the shared 1.5B model's ``relations`` answers (judge set and closed loops, 20 tasks × 5
-test seeds): the commonest wrong check that no other repair catches writes one relation of two.
-"Stack all blocks in the orange zone" became ``require_inside(blocks(), zone("orange"))`` (no
-stack), "Stack blocks of the same color that has the largest quantity in the zone" became
-``require_inside(blocks(color=largest), zone())`` (the loop's only high-confidence false
-"achieved" on seed 10003), a circle of alternating colours became ``require_circle`` alone.  Such a
-check says "achieved" of every state that keeps the relation it wrote and breaks the one it left
-out (an unstacked tower, a ring of swapped colours).
-
-The rule is a reader's, with no task knowledge: a goal that says "stack" asks for a stack or
-layers, "structure" or "layer" for layers, "circle" or "ring" for a circle, "alternat..." for
-alternating colours, and "in/on/into the ... zone/bowl" for where the objects must be.  A check
-that calls none of the matching ``require_*`` misses a relation the goal names.  The words are the
-relations' own names in the prompt, not any task's goal.
+A check that writes one relation of two ("stack all blocks in the orange zone" as
+``require_inside`` alone) says "achieved" of every state that keeps the relation it wrote and
+breaks the one it left out.  The rule is a reader's, with no task knowledge: a goal that says
+"stack" asks for a stack or layers, "structure" or "layer" for layers, "circle" or "ring" for a
+circle, "alternat..." for alternating colours, and "in/on/into the ... zone/bowl" for where the
+objects must be.  A check that calls none of the matching ``require_*`` misses a relation the goal
+names.  The words are the relations' own names in the prompt, not any task's goal.
 """
 
 from __future__ import annotations
@@ -42,8 +35,7 @@ COVERAGE: tuple[tuple[str, str, tuple[str, ...], str], ...] = (
      "where the objects must be (a zone or bowl)", PLACED, KEEP),
 )
 """(goal pattern, what it asks for, the checks any one of which asks for it, the advice).  "structure" and
-"layer" are the prompt's own words for ``require_layers``: the model wrote a 2*2*2 cube and a 9-4-1
-pyramid "structure" as one tower in 9 of 10 judged episodes."""
+"layer" are the prompt's own words for ``require_layers``, so their advice asks for layers instead of a tower."""
 
 
 def _asked(tree: ast.AST) -> set[str]:

@@ -1,27 +1,18 @@
 """Literals a relation check takes from nowhere: block colours and counts the goal does not say.
 
-Why, from the shared 1.5B model's ``relations`` answers on the judge's full set (20 tasks × 5 test
-seeds): for "Stack all blocks in the orange zone" it picked ``blocks(color="orange")`` in 5 of 5
-seeds (the zone's colour read as the blocks'); for "Stack blocks of the same color that has the
-largest quantity in the zone" it wrote ``require_count(blocks(color="green"), zone(), 3)`` in 4 of
-5 seeds, a colour and a count copied from nowhere, wrong on the goal state every time; for "Put the
-blocks in the bowls with mismatching colors" it named red and blue blocks the goal never mentions.
-Such checks are not blind and do not hold at the start, so the reporter's other repairs let them
-through, and their verdict is the same for the achieved and the failed state.
-
-The rule is the one a reader applies: a check may use what the goal says and what it computes
-from the objects, nothing else.  Read from the answer's text with :mod:`ast`, without any task
-knowledge:
+Such a check is not blind and does not hold at the start, so the reporter's other gates let it
+through, and its verdict is the same for the achieved and the failed state.  The rule is the one a
+reader applies: a check may use what the goal says and what it computes from the objects, nothing
+else.  Read from the answer's text with :mod:`ast`, without any task knowledge, it is ungrounded
+when it has:
 
 * a block colour written as a literal (``blocks(color="orange")``) that the goal uses only to name
   a place ("the orange zone");
 * a block colour written as a literal that the goal never says, when the scene has blocks of
   colours the literal does not list (a literal that lists every block colour, such as
   ``["green", "yellow"]`` for the two colours of an alternating stack, picks them all: it is
-  ``blocks()`` and guesses nothing; on the judge set the repair of that pick was worse) and
-  no zone or bowl has that colour (a place's colour is the "matching colour" reading: on seed
-  10001 the model's ``require_inside(blocks(color="brown"), bowl("brown"))`` for "the bowls with
-  matching colors" was right, and its repair was worse);
+  ``blocks()`` and guesses nothing) and no zone or bowl has that colour (a place's colour is the
+  "matching colour" reading, ``require_inside(blocks(color="brown"), bowl("brown"))``);
 * a count written as a literal in ``require_count`` that is not a number of the goal.
 """
 

@@ -1,45 +1,33 @@
 """The ``relations`` text-reporter prompt: the model names the relations the goal asks for, as
 calls of capmj's pre-bound checks, and capmj measures them on the final and the start scene.
 
-Why, from the shared 1.5B model's ``goalcheck`` run on the judge's full set (20 tasks × 5 test
-seeds, 495 states): balanced accuracy 56 %, and for 86 of the 99 episodes with both an achieved
-and a failed state the verdict was the same for both.  The checks the model wrote failed in their
-plumbing (a name used before it was set, ``judge`` set to a constant, ``levels == list(range(...))``
-over the wrong objects), not in reading the goal.  The checks it wrote that were neither blind nor
-true of the start scene scored 71.5 %.
+The question holds only the goal and the inventory (the keys acting cannot change), so the answer
+is written before the result is seen.  The answer is calls such as
+``require_inside(blocks(color="red"), zone("green"))`` (:mod:`capmj.agents.report.relations.checks`);
+the verdict is "achieved" exactly when no call failed, and ``wrong`` is the objects the failed
+calls name, so a "not achieved" always names movable objects.  The prompt is
+``prompts/reporter_relations.py``.
 
-So ``relations`` keeps what made ``goalcheck`` affordable and honest — the question holds only the
-goal and the inventory (the keys acting cannot change), the answer is written before the result is
-seen, and it runs on the start scene too, where no goal holds — and takes the plumbing away: the
-model writes calls such as ``require_inside(blocks(color="red"), zone("green"))`` and
-``require_stack(blocks(color="red"))`` (:mod:`capmj.agents.report.relations.checks`), each of which measures
-one relation and names the objects that break it.  The verdict is "achieved" exactly when no call
-failed; ``wrong`` is the objects the failed calls name, so a "not achieved" always names movable
-objects.  The prompt (``prompts/reporter_relations.py``) documents the calls and shows examples for
-goals that are none of the built-in tasks'.
+Each answer gets one repair request when it tests nothing or cannot be right.  The gates run in
+this order, and the first that finds a problem decides:
 
-Each answer gets one repair request when it tests nothing or cannot be right:
-
-* it calls no ``require_*`` (:data:`BLIND`), or a name the prompt does not define (the request
-  lists the valid names; never a function written by ``parse_function``: a made-up check would be
-  a second, unmeasured reporter).  Still so after the repair: the ``checked`` question as ``direct``
+* it calls a name the prompt does not define (:class:`~capmj.errors.UnknownCheckError`, naming the
+  valid ones; never a function written by ``parse_function``) or no ``require_*`` at all
+  (:data:`BLIND`).  Still so after the repair: the ``checked`` question as ``direct``
   (:class:`~capmj.agents.report.records.RecordsReporter`);
-* one contradiction has a reading: a group required as one tower and in layers of several is read
-  as required in layers, the tower asking only for its place (:data:`LAYERED`; the prompt says a
-  structure with several blocks in a layer is ``require_layers``);
+* a group required as one tower and in layers of several is read as layers, the tower asking only
+  for its place (:data:`LAYERED`): not a problem, a reading;
 * its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
-  :meth:`~capmj.agents.report.relations.checks.Failures.impossible`): it would say "not achieved", naming
-  objects, of every state.  Still so after the repair: kept, low-confidence (``impossible_check``);
+  :meth:`~capmj.agents.report.relations.checks.Failures.impossible`): ``impossible_check``;
 * it picks a block colour or a count the goal does not give
-  (:func:`~capmj.agents.report.relations.grounding.ungrounded`: "the orange zone" read as the orange blocks,
-  a guessed colour and count).  Still so after the repair: kept, low-confidence (``ungrounded_literal``);
+  (:func:`~capmj.agents.report.relations.grounding.ungrounded`): ``ungrounded_literal``;
 * its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
-  block, the usual cause).  Still so after the repair: kept, low-confidence (``holds_at_start``);
-* it never asks for a relation the goal names (:func:`~capmj.agents.report.relations.coverage.uncovered`:
-  "stack" with no stack or layers call, "in the zone" with no place ...).  Still so after the
-  repair: kept, low-confidence (``misses_a_relation``).
+  block): ``holds_at_start``;
+* it never asks for a relation the goal names
+  (:func:`~capmj.agents.report.relations.coverage.uncovered`): ``misses_a_relation``.
 
-The checks run in this order, and the first that finds a problem decides.
+Still so after the repair, the last four keep their verdict, low-confidence under their key.  Why
+each gate exists: ``docs/judge.md``, "Why each gate exists".
 """
 
 from __future__ import annotations
