@@ -66,7 +66,7 @@ class LLMAgent:
     """Plans with an LLM through the planner API; optional reporter and re-planning.
 
     ``config`` says what to ask (``config.model`` is any litellm model string: ``gpt-4o-mini``,
-    ``ollama/qwen2.5-coder``, ``openai/<alias>`` with ``api_base`` for OpenAI-compatible local
+    ``ollama/<model>``, ``openai/<alias>`` with ``api_base`` for OpenAI-compatible local
     servers) and is used as given; ``options`` how the loop runs (:mod:`capmj.agents.llm_agent.options`).
     :meth:`from_options` builds both from flat keyword options, as the bench does.
     """

@@ -4,26 +4,23 @@
 verdict, an error or a plan not run resets the scene to its initial state and re-plans; an unknown
 verdict follows ``--on-unknown``.  A plan that raised is not judged.
 
-``careful`` (issue #26) changes three things, each because of a measured failure of the thesis
-loop with the shared 1.5B model:
+``careful`` (issue #26) changes three things:
 
 a. **judge before resetting.** A plan that raised *after acting* is judged on the state it
-   reached.  Task A's first plan reached the goal in four lines, then raised at line 8; the loop
-   reset the scene because of the error and the re-plan failed.  Achieved: the episode stops there
-   (``achieved_after_error``; the error stays in the attempt record, the state is kept).
+   reached.  Achieved: the episode stops there (``achieved_after_error``; the error stays in the
+   attempt record, the state is kept).
 b. **re-plan from here.** A high-confidence "not achieved" naming some, not all, of the movable
    objects re-plans from the current state without a reset (``partial_replan``), told which
-   objects are wrong.  Resetting threw away the objects the plan had placed right.
+   objects are wrong, so the objects the plan placed right stay where they are.
 c. **stop on low confidence.** A verdict :func:`capmj.agents.report.confidence.assess` finds
    low-confidence (unknown, "not achieved" naming no real movable object, self-contradicting)
    keeps the state instead of re-planning from scratch (``low_confidence_stop``): such a verdict
-   is no evidence that the state is wrong, and an unfounded "no" was what undid reached goals
-   (H and J reached the goal, the reporter said no, the re-plan undid it).  After a plan that
-   raised, a low-confidence verdict does not stop: the error is evidence, so the thesis rule
-   (``error``: reset and re-plan) applies -- and the next plan is not told that verdict
-   (:attr:`Decision.shows_report`), so it is asked exactly what the loop without a reporter asks.
-   Told an unfounded "not achieved", the re-plan of task J (seed 10001) differed from the one the
-   loop without a reporter wrote, and undid a goal the failed plan had reached.
+   is no evidence that the state is wrong.  After a plan that raised, a low-confidence verdict
+   does not stop: the error is evidence, so the thesis rule (``error``: reset and re-plan)
+   applies -- and the next plan is not told that verdict (:attr:`Decision.shows_report`), so it is
+   asked exactly what the loop without a reporter asks.
+
+The failure of the thesis loop that each rule answers: ``docs/llm.md``, "Loop policies".
 
 Without a reporter both policies are the same.  Their names: :data:`capmj.agents.choices.LOOP_POLICIES`.  The rules are named in
 :data:`capmj.records.LOOP_RULES`; :func:`decide` is the one place that chooses among them.

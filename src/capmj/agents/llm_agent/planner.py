@@ -60,11 +60,12 @@ def replan_sampling(base: float, episode_seed: int, attempt: int, retry: int) ->
     identical answer) of the planner in re-plan ``attempt`` (2, 3, ...).
 
     The temperature is ``base`` (``--replan-temperature``) + :data:`REPLAN_TEMPERATURE_STEP` per
-    retry, at most :data:`MAX_REPLAN_TEMPERATURE`.  Why rising: a small model (Qwen2.5-Coder-1.5B)
-    copied the previous plan shown in the re-plan prompt 5 of 7 times even at 0.7; that copy is so
-    likely that sampling the same distribution again mostly draws it again, and flattening the
-    distribution is what makes another plan reachable.  Why capped: much above 1.5 a small model's
-    code turns to noise (misspelt API names, unbalanced brackets), which fails as surely as a copy.
+    retry, at most :data:`MAX_REPLAN_TEMPERATURE`.  Why rising: a small model copies the previous
+    plan shown in the re-plan prompt even at ``--replan-temperature`` (``docs/llm.md``, "Re-plans
+    that differ"); that copy is so likely that sampling the same distribution again mostly draws
+    it again, and flattening the distribution is what makes another plan reachable.  Why capped:
+    much above the cap a small model's code turns to noise (misspelt API names, unbalanced
+    brackets), which fails as surely as a copy.
 
     The seed (the OpenAI ``seed`` parameter) is derived from the episode seed, the attempt and the
     retry alone.  Why: without one, llama.cpp and other servers draw a random seed per request, so
@@ -190,9 +191,9 @@ def fresh_messages(session: LMPSession, goal: str, attempt: int, failed: Feedbac
     """A retry's conversation that does not contain the plan it keeps repeating: the planner prompt
     with the goal, followed by what went wrong in ``attempt`` (failing line, error, verdict).
 
-    Why: with the failed plan in the conversation (as the re-plan request must show it), a 1.5B
-    model copied it even at temperature 1.0-1.6 (2 of 7 re-plans still identical after three
-    retries); without it the model writes the plan anew, warned about the failure."""
+    Why: with the failed plan in the conversation (as the re-plan request must show it), a small
+    model copies it even at a high temperature; without it the model writes the plan anew, warned
+    about the failure (``docs/llm.md``, "Re-plans that differ")."""
     hint = [f"# An earlier plan for this goal (attempt {attempt}) did not achieve it."]
     hint += _failure(failed) if failed is not None else []
     hint.append("# Write a complete plan that avoids that failure.")
