@@ -1,4 +1,9 @@
-"""``python -m capmj.bench``: run task × seed grids for one agent configuration, and report.
+"""``python -m capmj.bench``: run task × seed grids for one agent configuration, and its commands.
+
+Without a command it runs a grid (:mod:`capmj.bench.run`).  The commands, ``report``,
+``replay-check``, ``judge`` and ``export``, are argparse subcommands named in :data:`COMMANDS`, a
+table of ``"module:function"`` strings imported only when the command runs: the bench names the
+judge without importing it, so the judge can use the bench's statistics without a cycle.
 
 Exit codes: 0 the grid ran (whatever the success rate), 2 bad input (unknown task/tag/agent, bad
 seed range, unwritable output folder, ...) with a one-line error, 128 + signal number when stopped
@@ -10,10 +15,11 @@ seed range, unwritable output folder, ...) with a one-line error, 128 + signal n
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 from pathlib import Path
-from typing import NoReturn, Sequence
+from typing import Callable, NamedTuple, NoReturn, Sequence, cast
 
 from capmj.bench.config import DEFAULT_TASKS
 from capmj.bench.options import PERCEPTION, add_agent_flags, budget_flags, execution_flags
@@ -40,6 +46,26 @@ examples:
 results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
          DIR/rrd/<task>/<seed>-<agent>.rrd (open with: python -m capmj.replay FILE --open)
 """
+
+
+class Command(NamedTuple):
+    """One command of :data:`COMMANDS`."""
+
+    target: str
+    """``module:function`` called with the command's arguments (it parses them and returns the exit code)."""
+    about: str
+    """One line for ``--help``."""
+
+
+COMMANDS: dict[str, Command] = {
+    "report": Command("capmj.bench.cli:report_main",
+                      "rebuild summary tables from result folders (several: side by side, paired McNemar test)"),
+    "replay-check": Command("capmj.bench.replay_check:main",
+                            "re-run a finished run from the LLM cache alone and compare (docs/failures.md)"),
+    "judge": Command("capmj.judge.cli:main", "score a completion reporter on labelled final states (docs/judge.md)"),
+    "export": Command("capmj.bench.export:main", "a run's LLM calls as fine-tuning data (docs/export.md)"),
+}
+"""``python -m capmj.bench COMMAND ...``; each parses its own arguments (``COMMAND --help``)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -78,6 +104,13 @@ def build_parser() -> argparse.ArgumentParser:
     logs.add_argument("--log-images", action="store_true", help="also log camera RGB + depth at every primitive")
     p.add_argument("--list", action="store_true", help="list tasks (plugin, version, tags) and broken plugins")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    commands = p.add_subparsers(dest="command", metavar="COMMAND", title="commands",
+                                description="instead of a grid; the options above are the grid's, a command's "
+                                            "own come after its name (COMMAND --help)")
+    for name, command in COMMANDS.items():
+        # the command's parser reads its arguments: here they are taken as they are, options included
+        sub = commands.add_parser(name, help=command.about, add_help=False, prefix_chars="\0")
+        sub.add_argument("args", nargs=argparse.REMAINDER)
     return p
 
 
@@ -150,21 +183,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     key explicitly."""
     take_secrets()
     argv = list(sys.argv[1:] if argv is None else argv)
-    if argv and argv[0] == "report":
-        return report_main(argv[1:])
-    if argv and argv[0] == "replay-check":
-        from capmj.bench.replay_check import main as replay_check_main
-
-        return replay_check_main(argv[1:])
-    if argv and argv[0] == "judge":
-        from capmj.judge.cli import main as judge_main
-
-        return judge_main(argv[1:])
-    if argv and argv[0] == "export":
-        from capmj.bench.export import main as export_main
-
-        return export_main(argv[1:])
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is not None:
+        if argv[0] != args.command:
+            parser.error(f"the grid's options do not go with a command: python -m capmj.bench {args.command} "
+                         "[its options]")
+        return command_main(args.command)(args.args)
     try:
         if args.list:
             return _list_tasks()
@@ -174,7 +199,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
 
 
-__all__ = ["EPILOG", "build_parser", "build_report_parser", "main", "parse_seeds", "report_main"]
+def command_main(name: str) -> Callable[[Sequence[str]], int]:
+    """The ``main`` of command ``name`` of :data:`COMMANDS`, imported now."""
+    module, _, attr = COMMANDS[name].target.partition(":")
+    return cast(Callable[[Sequence[str]], int], getattr(importlib.import_module(module), attr))
+
+
+__all__ = ["COMMANDS", "EPILOG", "Command", "build_parser", "build_report_parser", "command_main", "main",
+           "parse_seeds", "report_main"]
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,5 +18,6 @@ just outside a tolerance, each checked by the task's own predicate after settlin
 | :mod:`capmj.judge.cli` | ``python -m capmj.bench judge`` |
 
 It sits beside :mod:`capmj.bench` (it uses agents, tasks and sim, and bench only to share the
-Wilson interval and seed parsing).
+Wilson interval, the McNemar test and seed parsing); the bench's command line names it as a string
+(:data:`capmj.bench.cli.COMMANDS`) and imports none of it.
 """
