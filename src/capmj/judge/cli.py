@@ -32,9 +32,9 @@ EXIT_BUDGET = 3
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from capmj.agents.choices import REPORTER_PROMPTS
+    from capmj.agents.choices import REPORTER_PROMPTS, reporter_prompt_help
     from capmj.judge.cases import KINDS
-    from capmj.judge.evaluate import JUDGE_REPORTERS
+    from capmj.judge.evaluate import JUDGE_REPORTERS, LLM_REPORTERS
 
     p = argparse.ArgumentParser(
         prog="python -m capmj.bench judge",
@@ -56,14 +56,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"case kinds to build (default: all: {', '.join(KINDS)}); with --from, 'run' alone "
                         "judges only the run's final states")
     p.add_argument("--reporter", default="text", choices=JUDGE_REPORTERS,
-                   help="text / vlm: the closed loop's reporters; predicate: the task predicate (a reference)")
+                   help=f"{' / '.join(LLM_REPORTERS)}: the closed loop's reporters; predicate: the task predicate "
+                        "(a reference)")
     p.add_argument("--reporter-prompt", dest="reporter_prompt", default="thesis", choices=REPORTER_PROMPTS,
-                   help="the text reporter's prompt: thesis (checking code the model writes), checked (capmj "
-                        "binds the scene facts, the model compares them with the goal), records (capmj binds "
-                        "the facts as records, the model's checking code compares them) or goalcheck (the check "
-                        "is written from the goal and the objects alone, then run on the measured records of the "
-                        "state and of the start scene) or relations (the goal written as calls of capmj's pre-bound relation checks, "
-                        "measured on the state and the start scene); default thesis")
+                   help=reporter_prompt_help())
     p.add_argument("--per-task", dest="per_task", type=int, default=None, metavar="N",
                    help="judge a deterministic stratified subset: N cases per task, drawn in turn from oracle, "
                         "negatives, near_inside, near_outside (capmj.judge.subset); default: every case")

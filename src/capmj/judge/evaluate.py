@@ -24,7 +24,7 @@ from capmj.agents.llm_agent.options import DEFAULT_LMP_BUDGET
 from capmj.agents.lmp.meter import LLMMeter, parse_price
 from capmj.agents.lmp.session import LMPSession, find_llm_error
 from capmj.agents.report.confidence import assess
-from capmj.agents.choices import REPORTER_PROMPTS
+from capmj.agents.choices import REPORTER_PROMPTS, REPORTER_TABLE
 from capmj.agents.report.registry import Reporter, make_reporter
 from capmj.errors import ConfigError
 from capmj.judge.cases import JudgeCase, Stage
@@ -33,10 +33,14 @@ from capmj.llm.config import DEFAULT_TIMEOUT_S
 from capmj.record import NullRecorder, Recorder
 from capmj.tasks.protocol import episode_rng
 
-__all__ = ["JUDGE_REPORTERS", "JudgeConfig", "Judge"]
+__all__ = ["JUDGE_REPORTERS", "LLM_REPORTERS", "JudgeConfig", "Judge"]
 
-JUDGE_REPORTERS = ("text", "vlm", "predicate")
-"""Reporters ``judge`` evaluates: the loop's two LLM reporters and the predicate (a reference)."""
+LLM_REPORTERS: tuple[str, ...] = tuple(name for name, prompts in REPORTER_TABLE.items() if prompts)
+"""The closed loop's LLM reporters: every ``--reporter`` of :data:`capmj.agents.choices.REPORTER_TABLE`
+that has one (``none`` has none)."""
+
+JUDGE_REPORTERS: tuple[str, ...] = (*LLM_REPORTERS, "predicate")
+"""Reporters ``judge`` evaluates: the loop's LLM reporters and the predicate (a reference)."""
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ counts against accuracy, recall and specificity, and ``verdict_rate`` says how o
 Balanced accuracy, the mean of recall and specificity, is the headline figure because the set
 has more negatives than positives: an always-"no" reporter scores its negative share in accuracy
 but 0.5 here.  Every proportion comes with its 95 % Wilson interval.  ``high_confidence`` counts the
-verdicts :func:`capmj.agents.confidence.assess` trusts (the ones the ``careful`` loop acts on) and
+verdicts :func:`capmj.agents.report.confidence.assess` trusts (the ones the ``careful`` loop acts on) and
 ``high_confidence_accuracy`` is their share of right answers.
 
 Balanced accuracy can hide a reporter that does not look at the scene: one that answers each goal
@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
+from capmj.agents.choices import REPORTER_PROMPTS
 from capmj.agents.report.verdict import SOURCES
 from capmj.bench.results import wilson
 
@@ -34,13 +35,13 @@ RECORD_FIELDS: dict[str, str] = {
     "task": "task name", "seed": "episode seed", "case": "case name within (task, seed)",
     "kind": "oracle, displaced, unstacked, toppled, swapped, wrong_bowl, toppled_out, near_inside, near_outside (or run)",
     "label": "ground truth: the task predicate's success on the state", "reporter": "the reporter's label",
-    "reporter_prompt": "the text reporter's prompt: thesis, checked or records (--reporter-prompt)",
+    "reporter_prompt": f"the text reporter's prompt: {', '.join(REPORTER_PROMPTS)} (--reporter-prompt)",
     "verdict": "the reporter's verdict: true, false or null (unknown)",
     "source": "where the verdict came from: code, repair, direct, unknown (or predicate)",
     "reason": "the reporter's reason", "wrong": "objects it names as wrong",
     "errors": "problems met on the way to the verdict",
-    "confidence": "high / low (capmj.agents.confidence.assess; null without an LLM answer)",
-    "low_confidence": "why it is low (a key of capmj.agents.confidence.LOW_CONFIDENCE), else null",
+    "confidence": "high / low (capmj.agents.report.confidence.assess; null without an LLM answer)",
+    "low_confidence": "why it is low (a key of capmj.agents.report.confidence.LOW_CONFIDENCE), else null",
     "predicate": "the predicate re-evaluated on the state as judged (must equal label)",
     "correct": "verdict == label", "calls": "LLM calls", "cached_calls": "of which from the cache",
     "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
