@@ -15,8 +15,9 @@ from capmj.errors import ConfigError
 from capmj.llm.keys import api_key_for
 
 DEFAULT_TIMEOUT_S = 300.0
-"""Per-request timeout.  Generous on purpose: a 1.5B model on 2 CPU cores needs 40-90 s for a cold
-2k-token planner prompt and ~10 tokens/s of output; a cloud provider that hangs still ends."""
+"""Per-request timeout.  Generous on purpose: a small local model on a few CPU cores reads a cold
+planner prompt for tens of seconds before it writes (``docs/llm.md``); a cloud provider that hangs
+still ends."""
 
 LOCAL_DUMMY_KEY = "sk-local"
 """Key sent to a self-hosted ``api_base`` when none is configured (OpenAI clients demand one)."""

@@ -1,7 +1,7 @@
 """Streamed answers and stop sequences: what lets a slow local model finish (issue #27).
 
-Why streaming: a 1.5B model on two CPU cores writes 8-10 tokens/s, so a 1 500-token answer takes
-two and a half minutes.  Without streaming, the request timeout bounds the *whole* answer and a
+Why streaming: a small model on a few CPU cores writes about ten tokens a second, so a long answer
+takes minutes.  Without streaming, the request timeout bounds the *whole* answer and a
 long one is thrown away at the timeout and started again from nothing.  Streamed, the timeout is
 the HTTP read timeout between two chunks: a request fails only when the server sends nothing
 for that long (a stall), and then the text that did arrive is kept on the error.
@@ -10,8 +10,8 @@ Why stop sequences are also cut here: a provider that ignores ``stop`` (or a scr
 must not let a run-on answer through; the cut is the same either way, so the cached text is too.
 
 Why a repetition guard: a small model at temperature 0 sometimes falls into a loop, writing one
-comment line (or a short block) again and again until the token limit: 2 048 tokens, four minutes
-of a CPU server, for nothing (seen with the shared 1.5B model on the planner prompt).  No stop
+comment line (or a short block) again and again until the token limit: minutes of a CPU server
+for nothing (``docs/llm.md``).  No stop
 sequence can end it, because the repeated text is not the next example.  :func:`repetition_cut`
 finds such a loop at the end of the text; the stream is then closed (the server stops writing)
 and the answer keeps one copy of the repeated block.

@@ -1,8 +1,8 @@
 """Body poses buffered between flushes of an episode log, and the rows worth sending.
 
 Frames arrive every 25 physics steps with the pose of every body (~300 frames of ~20 bodies per
-episode).  Handling them body by body and frame by frame in Python cost ~15 % of an oracle
-episode's wall time (issue #17), so a frame is kept as the two arrays it arrives as, and a flush stacks
+episode).  Handling them body by body and frame by frame in Python was a large share of an
+episode's wall time (``docs/speed.md``, "Episode logs"), so a frame is kept as the two arrays it arrives as, and a flush stacks
 the frames into one ``(frames, bodies, 7)`` array and chooses the rows to send for all bodies at
 once (:func:`changed_rows`): one short loop over frames, none over bodies.
 """

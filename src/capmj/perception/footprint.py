@@ -132,8 +132,8 @@ def fit_l(xy: np.ndarray, cell: float) -> LFit:
 
     Why not the enclosing rectangle: the L's convex hull has a long diagonal edge (from the end of
     one wall to the end of the other), and with a few grown cells along a wall the minimum-area
-    rectangle of a turned L aligns with that diagonal instead of the walls (a 28° error at reset on
-    insert-blocks-in-fixture seed 10007).  The L is fitted as the shape it is instead:
+    rectangle of a turned L aligns with that diagonal instead of the walls (``docs/perception.md``).
+    The L is fitted as the shape it is instead:
 
     * every yaw 1° apart is tried; in the fixture's frame the long wall runs along +x from the
       corner and the short wall along +y (``mjcf/fixture.xml``), so under the right yaw the cells'

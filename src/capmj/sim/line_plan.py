@@ -41,9 +41,8 @@ sampled trajectory slip over it (which costs a retiming)."""
 
 TIMING_ACCEL_SHARE = 0.9
 """The timing plans to 90 % of the joint acceleration limit: the rest is room for the term it
-leaves out, the path's curvature in joint space (``q'' ṡ²``).  Measured over 600 lines of the
-primitives benchmark: at 100 % a third of the lines needed a retiming, at 90 % one in eleven, and
-the lines took 0.3 % less time overall than at 100 %."""
+leaves out, the path's curvature in joint space (``q'' ṡ²``), so a retiming is rare (the
+measurement: ``docs/speed.md``)."""
 
 RETIME_MARGIN = 1.05
 """Each retiming slows down by the measured over-limit ratio times this: 5 % more than the ratio, so

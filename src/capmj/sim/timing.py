@@ -4,7 +4,7 @@ Why: a straight tool line is first solved into a joint-space path ``q(s)``, ``s`
 (:class:`capmj.sim.motion.Motion`).  Timing it with one Cartesian trapezoid and then slowing the
 *whole* line down until the worst joint is within its limits (the first version) wasted time: on
 most lines one joint is near its limit for a short stretch only, yet every stretch ran slower
-(a horizontal carry took 30 % longer than its Cartesian trapezoid).  Here the path speed ``ṡ``
+(``docs/speed.md``).  Here the path speed ``ṡ``
 follows, point by point, the fastest profile from rest to rest under the tool's speed and
 acceleration caps and the fastest joint's ``|q'| ṡ <= v_max`` and ``|q'| |s̈| <= a_max``: the
 bang-bang solution of time-optimal path parameterisation (Bobrow 1985; TOPP-RA states it

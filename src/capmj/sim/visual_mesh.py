@@ -5,8 +5,8 @@ them).  On a software OpenGL renderer (llvmpipe, this machine's EGL) drawing the
 camera pass (~50 ms of ~75 ms per 640x480 view), and processing them made the first compile of a
 process take ~1.1 s.  capmj's arm collides through its capsules and takes its masses and inertias
 from the explicit ``<inertial>`` elements, so its visual meshes play no part in the physics: the
-world is compiled with simplified copies (same silhouette within ~1 cm, ~7 % of the triangles;
-physics bit-identical, tested).
+world is compiled with simplified copies (same silhouette within ~1 cm, a small fraction of the
+triangles; physics bit-identical, tested; ``docs/speed.md``, "Rendering").
 
 Simplification, per mesh: ``trimesh`` welds MuJoCo's per-face vertex copies, vertex clustering on
 a fine grid closes the seams that stop an edge-collapse simplifier, then quadric decimation
