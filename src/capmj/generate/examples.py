@@ -1,10 +1,9 @@
 """Library tasks shown to the generator as a generated task must be written: self-contained.
 
 Why: every installed task imports helpers from its own package (``capmj_tasks.common``,
-``capmj_tasks.structures``), which a generated task may not import.  A small model copies the
-imports of the examples it is shown whatever the prompt says: with the shared 1.5B model both
-candidates of a real run were rejected at the import check for exactly those lines (issue #27).
-So the writing turn shows each example *as if it had been written under the same rules*: every
+``capmj_tasks.structures``), which a generated task may not import, and a model copies the imports
+of the examples it is shown whatever the prompt says (``docs/generate.md`` has the run where this
+rejected every candidate).  So the writing turn shows each example *as if it had been written under the same rules*: every
 import outside the task API is replaced by the definitions it provided, copied from the helper
 module's source (recursively, only what is used), constants of modules outside the API become
 literals, and the library's own tags become the generated tag.

@@ -79,8 +79,8 @@ def extract_json(answer: str) -> Any:
     """The first JSON value of an LLM answer (fenced or bare); raises ``ValueError``.
 
     An answer that is JSON but for ``// comments``, ``...`` placeholders or trailing commas is read
-    without them: the shared 1.5B model's first bottom-up proposal was such an object, and the
-    candidate stopped at the proposal although the answer held one."""
+    without them (models write such objects; the candidate would otherwise stop at a proposal the
+    answer holds)."""
     text = answer.strip()
     fenced = re.search(r"```(?:json)?\s*\n(.*?)```", text, re.DOTALL)
     if fenced:
