@@ -78,7 +78,7 @@ class JudgeConfig:
 
     @property
     def label(self) -> str:
-        """``text openai/qwen2.5-coder-1.5b``, ``text/checked openai/...``, ``predicate``: the name of
+        """``text openai/<model>``, ``text/checked openai/<model>``, ``predicate``: the name of
         this reporter in reports (the thesis prompt adds nothing, as before prompts were selectable)."""
         if self.reporter == "predicate":
             return self.reporter

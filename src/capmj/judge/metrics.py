@@ -15,10 +15,8 @@ Balanced accuracy can hide a reporter that does not look at the scene: one that 
 the same way whatever the state scores 0.5 per task and can look fair overall.  So each group also
 counts its **contrasts**, the (task, seed) episodes with both an achieved and a failed state judged:
 ``contrasts_told_apart`` is the number whose every achieved state got True and every failed state
-False, ``contrasts_state_blind`` the number whose states all got the same verdict (unknown included).
-The shared 1.5B model's ``records`` checks gave the positive and the negative of one episode the
-same verdict in 15 of 19 contrasts (seed 10001; the ``checked`` answers too): the verdict depended on
-the goal, not on the state.
+False, ``contrasts_state_blind`` the number whose states all got the same verdict (unknown included):
+a reporter whose verdict follows the goal, not the state, shows here (``docs/judge.md`` has the case).
 """
 
 from __future__ import annotations
