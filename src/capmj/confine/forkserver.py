@@ -35,17 +35,6 @@ from capmj.confine.jail import TMP
 _PR_SET_DUMPABLE = 4
 
 
-def _read_exact(fd: int, n: int) -> bytes:
-    chunks, got = [], 0
-    while got < n:
-        chunk = os.read(fd, min(n - got, 1 << 16))
-        if not chunk:
-            raise EOFError
-        chunks.append(chunk)
-        got += len(chunk)
-    return b"".join(chunks)
-
-
 def _write_all(fd: int, data: bytes) -> None:
     view = memoryview(data)
     while view:
@@ -54,7 +43,7 @@ def _write_all(fd: int, data: bytes) -> None:
 
 def read_raw(fd: int, limit: int) -> bytes:
     """One frame's payload from ``fd``, its length checked against ``limit`` (EOF: ``EOFError``)."""
-    return _read_exact(fd, wire.frame_length(_read_exact(fd, 4), limit))
+    return wire.read_exact(fd, wire.frame_length(wire.read_exact(fd, 4), limit))
 
 
 def write_raw(fd: int, payload: bytes) -> None:

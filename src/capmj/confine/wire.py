@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import select
 import struct
+import time
 from typing import IO, Any, Mapping
 
 import numpy as np
@@ -78,6 +81,23 @@ def decode_frame(payload: bytes) -> dict[str, Any]:
     if not isinstance(value, dict):
         raise WireError(f"a message must be a JSON object, got {type(value).__name__}")
     return value
+
+
+def read_exact(fd: int, n: int, deadline: float | None = None) -> bytes:
+    """Exactly ``n`` bytes from descriptor ``fd``: ``EOFError`` if it closes first, ``TimeoutError``
+    if ``deadline`` (a ``time.monotonic()`` value) passes first."""
+    chunks, got = [], 0
+    while got < n:
+        if deadline is not None:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise TimeoutError
+        chunk = os.read(fd, min(n - got, 1 << 16))
+        if not chunk:
+            raise EOFError
+        chunks.append(chunk)
+        got += len(chunk)
+    return b"".join(chunks)
 
 
 def read_frame(inp: IO[bytes], limit: int) -> dict[str, Any]:
@@ -271,6 +291,6 @@ def rng_from_wire(v: Any) -> dict[str, Any]:
             "uinteger": _int(_field(v, "uinteger", "rng"), "rng.uinteger", 0, 2**32 - 1)}
 
 
-__all__ = ["MAX_FROM_JAIL", "MAX_TO_JAIL", "WireError", "decode_frame", "frame_length", "goal_to_wire",
+__all__ = ["MAX_FROM_JAIL", "MAX_TO_JAIL", "WireError", "decode_frame", "frame_length", "goal_to_wire", "read_exact",
            "goals_from_wire", "read_frame", "rng_from_wire", "rng_to_wire", "scene_from_wire", "scene_to_wire",
            "state_from_wire", "state_to_wire", "verdict_from_wire", "verdict_to_wire", "write_frame"]
