@@ -23,7 +23,6 @@ facts from the manifest starts no process, so listing tasks never runs generated
 
 from __future__ import annotations
 
-import hashlib
 import os
 import signal
 import subprocess
@@ -39,6 +38,7 @@ import numpy as np
 
 from capmj.confine import jail, wire
 from capmj.confine.guard import VIOLATION_EXIT
+from capmj.confine.manifest import sha256_text
 from capmj.errors import ConfinedTaskError, ConfinementError, GuardRefused
 from capmj.sim.state import SceneState
 from capmj.tasks.protocol import OracleGoal, Scene, Verdict
@@ -62,7 +62,7 @@ class ModuleSource:
 
     @property
     def sha256(self) -> str:
-        return hashlib.sha256(self.text.encode()).hexdigest()
+        return sha256_text(self.text)
 
 
 @dataclass(frozen=True)
