@@ -305,10 +305,6 @@ class ConfinedTask:
             assert self.expected is not None
             return self.expected
 
-    @property
-    def facts(self) -> TaskFacts:
-        return self.expected if self.expected is not None else self.load()
-
     # -- processes --------------------------------------------------------------------------
     def _kill_jail(self) -> None:
         j = self._local.jail
