@@ -10,6 +10,7 @@ example for that question, through the real LMP machinery.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import numpy as np
@@ -108,6 +109,27 @@ def test_planner_example_succeeds(lmp: str, example) -> None:
     _check(session.helper_env(), example)
     # every helper question the example asked was answered by a real helper example
     assert all(lmp in HELPER_LMPS for lmp, _ in llm.asked)
+
+
+@pytest.mark.parametrize("example", load_prompt("multiturn_system.txt").examples, ids=lambda e: e.id)
+def test_multiturn_example_runs_turn_by_turn_in_one_namespace(example) -> None:
+    """The example conversation of ``prompts/multiturn_system.txt``: its blocks, run in order in one
+    namespace on the example's scene (as ``--interaction multi`` runs turns), reach the task's
+    predicate, and the conversation ends with FINISH."""
+    blocks = [b.split("\n", 1)[1].split("```")[0] for b in example.body.split("```python")[1:]]
+    assert len(blocks) >= 2 and example.body.rstrip().endswith("FINISH")
+    goal = example.body.split("goal: ", 1)[1].split(")", 1)[0]
+    ctx = build_context(dataclasses.replace(example, body=f"# {goal}\n"))
+    session, _ = session_for(ctx, ExampleLLM())
+    namespace: dict[str, object] = {}
+    for i, block in enumerate(blocks, start=1):
+        env = session.plan_env()
+        env["objects"] = [o.name for o in ctx.world.objects]
+        env.update(namespace)
+        namespace.update(run_code(block, env, filename=f"<multiturn/{example.id}/turn {i}>"))
+    assert "task" in example.meta
+    verdict = ctx.verdict()
+    assert verdict.success, (example.id, verdict.diagnostics)
 
 
 @pytest.mark.parametrize(("lmp", "example"), examples("parse_obj_name") + examples("parse_position")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-__all__ = ["LOOP_POLICIES", "ON_UNKNOWN", "REPORTERS", "REPORTER_PROMPTS", "REPORTER_TABLE", "ReporterEntry",
+__all__ = ["FEEDBACKS", "INTERACTIONS", "LOOP_POLICIES", "ON_UNKNOWN", "REPORTERS", "REPORTER_PROMPTS", "REPORTER_TABLE", "ReporterEntry",
            "reporter_prompt_help"]
 
 
@@ -52,6 +52,15 @@ REPORTER_PROMPTS: tuple[str, ...] = tuple(REPORTER_TABLE["text"])
 
 LOOP_POLICIES = ("thesis", "careful")
 """``--loop-policy``: see :mod:`capmj.agents.llm_agent.loop_policy`."""
+
+INTERACTIONS = ("single", "multi")
+"""``--interaction``: ``single`` (default: one whole plan per attempt, the thesis's loop) or ``multi``
+(turns of code with execution feedback until the model says FINISH: :mod:`capmj.agents.llm_agent.multiturn`)."""
+
+FEEDBACKS = ("text", "image", "describe")
+"""``--feedback`` of ``--interaction multi``: what the model is shown after a turn (``text``, the default:
+output, error, API calls, objects; ``image``: also the cameras' RGB views; ``describe``: also a second
+model's description of what changed between the views before and after the turn)."""
 
 ON_UNKNOWN = ("replan", "stop")
 """``--on-unknown``: what an unknown reporter verdict does: re-plan like a False verdict (default),

@@ -6,7 +6,9 @@ documented with examples in ``docs/failures.md``; in short:
 
 1. ``infrastructure`` — the episode never ran its agent or could not be judged (worker crash,
    scene generation or evaluation failed).
-2. ``budget`` — the episode's LLM token/cost budget stopped it (``llm.stopped == "llm budget"``).
+2. ``budget`` — the episode's LLM token/cost budget stopped it (``llm.stopped == "llm budget"``);
+   ``no_finish`` — a multi-turn episode used its ``--max-turns`` without the model saying FINISH
+   (``llm.stopped == "turns used up"``), whatever its last turn did.
 3. ``reporter_false_negative`` — an earlier attempt reached the goal (task predicate true on the
    state the reporter judged) but the reporter said "not achieved", so the scene was reset.
 4. ``llm_error`` — the provider failed after the client's retries (attempt ``error_kind`` llm).
@@ -53,13 +55,14 @@ from capmj.errors import (
     error_class,
 )
 from capmj.records import AttemptRecord, Episode, EpisodeRecord
+from capmj.records.notes import TURNS_USED_UP
 
 __all__ = ["DRIFT_TOL_M", "LABELS", "breakdown", "classify", "failure_of"]
 
 LABELS: tuple[str, ...] = (
     "no_code", "syntax", "sandbox_violation", "budget", "unknown_object", "api_misuse", "plan_exception",
     "helper_lmp", "perception", "motion", "physics", "wrong_plan", "reporter_false_positive", "reporter_false_negative",
-    "llm_error", "infrastructure",
+    "llm_error", "no_finish", "infrastructure",
 )
 """Every label :func:`classify` can return, in the order tables show them."""
 
@@ -112,6 +115,8 @@ def classify(rec: Episode) -> str | None:
         return "infrastructure"
     if llm is not None and llm.stopped == "llm budget":
         return "budget"
+    if llm is not None and llm.stopped == TURNS_USED_UP:
+        return "no_finish"
     for a in attempts[:-1]:
         if a.verdict is False and a.predicate is True:
             return "reporter_false_negative"

@@ -16,7 +16,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from capmj.agents.choices import LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS, reporter_prompt_help
+from capmj.agents.choices import FEEDBACKS, INTERACTIONS, LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS, reporter_prompt_help
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
@@ -86,6 +86,16 @@ AGENT_FLAGS: tuple[Flag, ...] = (
          f"parse_position, ... called by the code; default: {DEFAULT_EPISODE_MAX_HELPER_CALLS}); an episode over it "
          "ends with failure 'budget'",
          int, "N"),
+    Flag(("--interaction",), "interaction", "single (default: one whole plan per attempt) or multi (turns of code, "
+         "each run where the last left the robot, with feedback, until the model answers FINISH; docs/llm.md)",
+         choices=INTERACTIONS),
+    Flag(("--feedback",), "feedback", "what --interaction multi shows after a turn: text (default: output, error, API "
+         "calls, objects), image (also the cameras' RGB views) or describe (also a model's account of what changed)",
+         choices=FEEDBACKS),
+    Flag(("--max-turns",), "max_turns", "turns of --interaction multi (default: 8); a model that never says FINISH "
+         "ends there (failure 'no_finish')", int, "N"),
+    Flag(("--describe-model",), "describe_model", "the model of --feedback describe (default: --model)",
+         metavar="MODEL"),
     Flag(("--price",), "price", "declare the model's price in USD per million input,output tokens (local/unlisted "
          "models)", metavar="IN,OUT"),
 )
@@ -97,7 +107,7 @@ AGENT_OPTIONS: tuple[str, ...] = (tuple(o.field for o in LLM_OPTIONS) + tuple(f.
 ``LLMConfig`` field names); ``perception`` is also the reference agent's."""
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
-                 "perception", "loop_policy", "reporter_prompt")
+                 "perception", "loop_policy", "reporter_prompt", "interaction", "feedback", "max_turns")
 """Agent options that tell configurations apart in report column labels (besides agent and model)."""
 
 

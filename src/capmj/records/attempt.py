@@ -30,6 +30,9 @@ LOOP_RULES: dict[str, str] = {
     "low_confidence_stop": "careful: the verdict is low-confidence (capmj.agents.report.confidence): stop, keep the state",
     "llm_error": "the LLM provider failed: stop",
     "llm_budget": "the episode's LLM budget is used up: stop",
+    "finish": "multi-turn: the model answered FINISH: stop (the scene as it is)",
+    "next_turn": "multi-turn: no FINISH: the model gets the turn's feedback and answers again, no reset",
+    "max_turns": "multi-turn: the last turn (--max-turns) ended without FINISH: stop",
 }
 """What the loop decided after an attempt (``rule`` of an attempt record), by
 :func:`capmj.agents.llm_agent.loop_policy.decide`.  The loop also stops when the attempts are used up
@@ -71,6 +74,10 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "primitives": "pick-and-place calls", "api_calls": "planner API calls",
     "llm_calls": "LLM calls", "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
     "said": "messages of the plan's say()",
+    "finish": "multi-turn only: the answer said FINISH (its code, if any, ran first); absent in single-turn records",
+    "feedback": "multi-turn only: the feedback message's text sent after this turn (None after the last)",
+    "images": "multi-turn only: camera images sent with that feedback (0 with --feedback text)",
+    "described": "multi-turn --feedback describe only: the describing model's account of what changed",
 }
 """The keys of every attempt record in ``llm.attempts`` and their meaning."""
 
@@ -129,11 +136,17 @@ class AttemptRecord:
     prompt_tokens: int = 0
     completion_tokens: int = 0
     said: tuple[str, ...] = ()
+    finish: bool | None = None
+    feedback: str | None = None
+    images: int | None = None
+    described: str | None = None
 
     OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"error_kind", "error_type", "error_status",
-                                                         "failed_program", "api_error", "reporter_error"})
+                                                         "failed_program", "api_error", "reporter_error",
+                                                         "finish", "feedback", "images", "described"})
     """Keys present only with an error (or, ``reporter_error``, a reporter's own error), as written
-    before records were typed."""
+    before records were typed; and the turn keys of a multi-turn episode (issue #47), absent from
+    single-turn records, so those are written and read exactly as before."""
     DEFAULT_IF_MISSING: ClassVar[frozenset[str]] = frozenset({"confidence", "low_confidence", "rule"})
     """Keys added after ``capmj.episode/2`` was first written (issue #26's loop policies): a line
     without them reads as their defaults."""

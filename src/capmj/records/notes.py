@@ -15,7 +15,11 @@ from typing import Any, ClassVar
 from capmj.records.attempt import AttemptRecord
 from capmj.records.codec import from_plain, to_plain
 
-__all__ = ["LLMNotes", "Spend", "SpendLimits"]
+__all__ = ["LLMNotes", "Spend", "SpendLimits", "TURNS_USED_UP"]
+
+TURNS_USED_UP = "turns used up"
+"""``LLMNotes.stopped`` of a multi-turn episode that reached its ``max_turns`` without the model's
+FINISH (failure label ``no_finish``, :mod:`capmj.bench.failures`)."""
 
 
 @dataclass(frozen=True)
@@ -78,10 +82,21 @@ class LLMNotes:
     latency_s: float = 0.0
     stopped: str | None = None
     spend: Spend | None = None
+    interaction: str | None = None
+    """``multi`` for a multi-turn episode (each attempt record is a turn); None (absent): single-turn."""
+    feedback: str | None = None
+    """Multi-turn: ``text``, ``image`` or ``describe``."""
+    max_turns: int | None = None
+    """Multi-turn: the turn limit."""
+    finish_agreed: bool | None = None
+    """Multi-turn: whether the task predicate held when the model said FINISH (its self-assessment,
+    like a reporter's verdict); None when it never said FINISH."""
 
-    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"stopped", "spend"})
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"stopped", "spend", "interaction", "feedback", "max_turns",
+                                                         "finish_agreed"})
     """Keys absent until the loop stops / the episode's spend is summed up (an agent that raised
-    before that)."""
+    before that); the multi-turn keys (issue #47) absent from single-turn records, which stay as
+    they were written before."""
     DEFAULT_IF_MISSING: ClassVar[frozenset[str]] = frozenset({"loop_policy", "reporter_prompt"})
     """Added with issue #26's loop policies and reporter prompts; older lines ran the thesis's."""
 

@@ -14,6 +14,9 @@ Per episode (``act``), under the default ``loop_policy="thesis"``::
         stop when the verdict is True, or there is no reporter and the plan finished,
              or the verdict is unknown and on_unknown == "stop"
 
+``interaction="multi"`` runs turns of code with execution feedback instead of this loop
+(:mod:`capmj.agents.llm_agent.multiturn`); the default ``single`` is this loop.
+
 ``loop_policy="careful"`` judges a plan that raised after acting, re-plans from the current state
 when the verdict names only some objects wrong, and stops on a low-confidence verdict; the rules
 and why are in :mod:`capmj.agents.llm_agent.loop_policy`, which decides after every attempt (the rule that
@@ -47,6 +50,7 @@ from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_ll
 from capmj.agents.llm_agent.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
 from capmj.agents.report.plan_check import plan_check
+from capmj.agents.llm_agent.multiturn import run_turns
 from capmj.agents.llm_agent.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.report.registry import Reporter, make_reporter
 from capmj.agents.report.verdict import Report
@@ -101,6 +105,9 @@ class LLMAgent:
 
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
+        if self.options.interaction == "multi":  # turns of code with feedback: its own module
+            run_turns(self, ctx, check=plan_check)
+            return
         client = self.client = self._client()
         o = self.options
         meter = self.meter = LLMMeter(self.model, price=o.price, max_tokens=o.episode_max_tokens,

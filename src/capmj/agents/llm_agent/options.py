@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from capmj.agents.choices import ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
+from capmj.agents.choices import FEEDBACKS, INTERACTIONS, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
 from capmj.agents.lmp.meter import Price, check_limit, parse_price
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.agents.llm_agent.loop_policy import check_policy
@@ -42,6 +42,9 @@ MAX_REPLAN_RETRIES = 10
 
 DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
 """Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
+
+DEFAULT_MAX_TURNS = 8
+"""Turns of ``--interaction multi`` when ``max_turns`` is not given."""
 
 DEFAULT_MODEL = "gpt-4o-mini"
 """The model of an LLM agent built from options that name none."""
@@ -92,6 +95,16 @@ class LLMAgentOptions:
     None: no cap).  Over it the episode ends as over its LLM budget (failure ``budget``)."""
     price: Price | None = None
     """The declared price (USD per million input, output tokens); a string ``"IN,OUT"`` is parsed."""
+    interaction: str = "single"
+    """:data:`capmj.agents.choices.INTERACTIONS`: ``single`` is the plan-and-report loop above; ``multi``
+    runs turns of code with feedback (:mod:`capmj.agents.llm_agent.multiturn`) and takes no reporter and
+    one attempt."""
+    feedback: str | None = None
+    """``multi`` only: :data:`capmj.agents.choices.FEEDBACKS` (None: ``text``)."""
+    max_turns: int | None = None
+    """``multi`` only: turns before the episode ends without the model's FINISH (None: :data:`DEFAULT_MAX_TURNS`)."""
+    describe_model: str | None = None
+    """``multi`` with ``feedback="describe"`` only: the model that describes what changed (None: the planner's)."""
 
     def __post_init__(self) -> None:
         def set_(name: str, value: Any) -> None:
@@ -122,6 +135,29 @@ class LLMAgentOptions:
         set_("episode_max_tokens", check_limit(self.episode_max_tokens, "episode_max_tokens", int))
         set_("episode_max_cost_usd", check_limit(self.episode_max_cost_usd, "episode_max_cost_usd", float))
         set_("episode_max_helper_calls", check_limit(self.episode_max_helper_calls, "episode_max_helper_calls", int))
+        self._check_interaction(set_)
+
+    def _check_interaction(self, set_: Callable[[str, Any], None]) -> None:
+        """``interaction`` and the options only ``multi`` takes; ``multi`` normalises ``feedback`` and
+        ``max_turns`` to their defaults, so its records always state them."""
+        if self.interaction not in INTERACTIONS:
+            raise ConfigError(f"unknown interaction {self.interaction!r}; valid: {', '.join(INTERACTIONS)}")
+        if self.interaction == "single":
+            given = [n for n in ("feedback", "max_turns", "describe_model") if getattr(self, n) is not None]
+            if given:
+                raise ConfigError(f"{', '.join(given)} need(s) --interaction multi")
+            return
+        if self.reporter != "none" or self.attempts != 1:
+            raise ConfigError("--interaction multi takes no --reporter and no --attempts: the model's FINISH ends "
+                              "the episode, --max-turns bounds it")
+        feedback = "text" if self.feedback is None else self.feedback
+        if feedback not in FEEDBACKS:
+            raise ConfigError(f"unknown feedback {feedback!r}; valid: {', '.join(FEEDBACKS)}")
+        if self.describe_model is not None and feedback != "describe":
+            raise ConfigError("describe_model (--describe-model) needs --feedback describe")
+        set_("feedback", feedback)
+        turns = DEFAULT_MAX_TURNS if self.max_turns is None else self.max_turns
+        set_("max_turns", _at_least("max_turns", turns, int, "an integer", 1))
 
 
 OPTION_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(LLMAgentOptions))
@@ -163,6 +199,6 @@ def llm_agent_configs(options: Mapping[str, Any]) -> tuple[LLMConfig, LLMAgentOp
     return LLMConfig(**llm), LLMAgentOptions(**{k: given[k] for k in OPTION_FIELDS if k in given})
 
 
-__all__ = ["CONFIG_FIELDS", "DEFAULT_LMP_BUDGET", "DEFAULT_MODEL", "DEFAULT_REPLAN_RETRIES",
+__all__ = ["CONFIG_FIELDS", "DEFAULT_LMP_BUDGET", "DEFAULT_MAX_TURNS", "DEFAULT_MODEL", "DEFAULT_REPLAN_RETRIES",
            "DEFAULT_REPLAN_TEMPERATURE", "LLMAgentOptions", "LLM_AGENT_OPTIONS", "MAX_REPLAN_RETRIES",
            "OPTION_FIELDS", "llm_agent_configs"]
