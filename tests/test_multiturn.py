@@ -253,3 +253,33 @@ def test_the_bench_command_line_passes_the_multi_turn_options() -> None:
     args = build_parser().parse_args(["--agent", "llm", "--interaction", "multi", "--feedback", "image",
                                       "--max-turns", "4"])
     assert given_agent_options(args) == {"interaction": "multi", "feedback": "image", "max_turns": 4}
+
+
+def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, tmp_path: Path) -> None:
+    """docs/llm.md's multi-turn command, against the scripted server (one task, in this process),
+    then ``replay-check`` of its folder from the cache alone."""
+    import json
+
+    from capmj.bench.cli import main
+    from capmj.bench.replay_check import main as replay_check
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "llm.md").read_text()
+    section = doc.split("## Multi-turn code with execution feedback")[1].split("\n## ")[0]
+    argv = section.split("python -m capmj.bench ")[1].split("```")[0].replace("\\\n", " ").split()
+    given = dict(zip(argv[::2], argv[1::2]))
+    assert given["--interaction"] == "multi" and given["--feedback"] == "text" and given["--max-turns"] == "8"
+    swap = {"--model": "openai/stub", "--api-base": server.base_url, "--llm-cache": str(tmp_path / "cache"),
+            "--tasks": TASK, "--out": str(tmp_path / "run"), "--workers": "0"}
+    argv = [x for k, v in given.items() for x in (k, swap.get(k, v))]
+    server.respond_with(turns(code(LOOK), "FINISH"))
+    assert main(argv) == 0
+    episodes = [json.loads(line) for line in (tmp_path / "run" / "episodes.jsonl").read_text().splitlines()]
+    assert len(episodes) == 2 and all(e["llm"]["interaction"] == "multi" for e in episodes)
+    assert all(e["failure"] == "wrong_plan" and e["llm"]["finish_agreed"] is False for e in episodes)
+    config = json.loads((tmp_path / "run" / "config.json").read_text())
+    assert {k: config["args"]["agent_options"][k] for k in ("interaction", "feedback", "max_turns")} == {
+        "interaction": "multi", "feedback": "text", "max_turns": 8}
+    server.reset()
+    server.respond_with(lambda request: Reply.error(500, "must not be called"))
+    assert replay_check([str(tmp_path / "run")]) == 0
+    assert len(server.requests) == 0
