@@ -279,6 +279,13 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     config = json.loads((tmp_path / "run" / "config.json").read_text())
     assert {k: config["args"]["agent_options"][k] for k in ("interaction", "feedback", "max_turns")} == {
         "interaction": "multi", "feedback": "text", "max_turns": 8}
+    assert config["manifest"]["interaction"] == {"mode": "multi", "feedback": "text", "max_turns": 8,
+                                                 "describe_model": None}
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    turns_ = summary["overall"]["llm openai/stub"]["loop"]["turns"]
+    assert turns_ == {"episodes": 2, "mean_turns": 2.0, "finished": 2, "finish_agree": 0,
+                      "finish_false_positives": 2, "finish_agreement": 0.0, "no_finish": 0}
+    assert "## Multi-turn (LLM agent, --interaction multi)" in (tmp_path / "run" / "summary.md").read_text()
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     assert replay_check([str(tmp_path / "run")]) == 0

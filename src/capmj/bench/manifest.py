@@ -4,7 +4,8 @@ Recorded: capmj's git revision and dirty flag (when run from a checkout), the ve
 package that shapes results, sha256 of every prompt file and every task plugin module used, the
 model string and the API base *host* (never a key, never the full URL's credentials), what the
 planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.api.perceived`), the
-sandbox, simulation and LLM budgets, and ``PYTHONHASHSEED``.  :func:`differences` lists the
+sandbox, simulation and LLM budgets, ``PYTHONHASHSEED``, and for ``--interaction multi`` the
+``interaction`` (its feedback, turn limit and describing model; absent from single-turn manifests).  :func:`differences` lists the
 manifest entries in which combined runs disagree, for ``report`` to warn about.
 """
 
@@ -33,7 +34,7 @@ __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "packa
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
 MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "perception", "budgets",
-                 "hash_seed")
+                 "hash_seed", "interaction")
 """Entries compared between runs (everything but timestamps, price and cache location)."""
 
 
@@ -134,7 +135,18 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "price": _asdict(price),
         "cache_dir": str(cfg.cache_dir) if cfg is not None and cfg.cache_dir is not None else None,
         "hash_seed": os.environ.get("PYTHONHASHSEED"),
+        **_interaction(agent),
     }
+
+
+def _interaction(agent: Any) -> dict[str, Any]:
+    """``interaction`` of a multi-turn LLM agent (``{"interaction": {"mode": "multi", "feedback", "max_turns",
+    "describe_model"}}``); nothing for every other agent, so single-turn manifests stay as they were."""
+    if agent_setting(agent, "interaction") != "multi":
+        return {}
+    return {"interaction": {"mode": "multi", "feedback": agent_setting(agent, "feedback"),
+                            "max_turns": agent_setting(agent, "max_turns"),
+                            "describe_model": agent_setting(agent, "describe_model")}}
 
 
 def _flat(prefix: str, v: Any, out: dict[str, Any]) -> None:

@@ -144,6 +144,7 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                        f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
                        f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
+    out += _turns_table(rows, labels)
     out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
     out += cost_section(summary, task_label, _order)
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
@@ -183,6 +184,31 @@ def _loop_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[
                        f"{_count_cell(lp['agree'], lp['compared'])} | {lp['false_positives']} | "
                        f"{lp['false_negatives']} | {_count_cell(lp['identical_replans'], lp['replans'])} | "
                        f"{lp['not_rerun']} | {lp['extra_requests']} | {lp['mean_tokens']:.0f} |")
+    return out
+
+
+def _turns_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
+    """The multi-turn table (``--interaction multi`` cells only; empty without any)."""
+    cells: list[tuple[str, str, Mapping[str, Any], Mapping[str, Any]]] = []
+    for t, per in rows:
+        for lab in labels:
+            st = per.get(lab) or {}
+            tp = (st.get("loop") or {}).get("turns")
+            if tp:
+                cells.append((t, lab, tp, st))
+    if not cells:
+        return []
+    out = ["", "## Multi-turn (LLM agent, --interaction multi)", "",
+           "*FINISH agreement* = episodes the model ended with FINISH in which the task predicate held "
+           "(its self-assessment, as reporter agreement above), *FINISH, not achieved* = the others; "
+           "*no FINISH* = episodes that used all their turns (failure no_finish). See docs/llm.md.", "",
+           "| Task | Configuration | success | turns/ep | FINISH agreement | FINISH, not achieved | no FINISH |",
+           "|---|---|---:|---:|---:|---:|---:|"]
+    for t, lab, tp, st in cells:
+        name = t if t.startswith("**") else task_label(t)
+        out.append(f"| {name} | {lab} | {_count_cell(st['successes'], st['n'])} | {tp['mean_turns']:.2f} | "
+                   f"{_count_cell(tp['finish_agree'], tp['finished'])} | {tp['finish_false_positives']} | "
+                   f"{tp['no_finish']} |")
     return out
 
 

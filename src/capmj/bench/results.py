@@ -27,6 +27,7 @@ from capmj.bench.rundir import CONFIG, EPISODES, SUMMARY_JSON, SUMMARY_MD, SUMMA
 from capmj.bench.spend import usage
 from capmj.errors import RecordError
 from capmj.records import Episode, EpisodeRecord, Key
+from capmj.records.notes import TURNS_USED_UP
 
 SUMMARY_SCHEMA = "capmj.bench-summary/1"
 REQUIRED_KEYS: tuple[str, ...] = ("task", "seed", "agent", "model", "success", "progress", "primitives",
@@ -282,7 +283,22 @@ def loop_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
         "mean_tokens": (sum(prompt) + sum(completion)) / n,
         "mean_prompt_tokens": sum(prompt) / n,
         "mean_completion_tokens": sum(completion) / n,
+        **_turn_stats(eps),
     }
+
+
+def _turn_stats(eps: Sequence[Episode]) -> dict[str, Any]:
+    """``{"turns": ...}`` of the multi-turn episodes among ``eps`` (see :func:`loop_stats`); {} without any."""
+    multi = [r.llm for r in eps if r.llm is not None and r.llm.interaction == "multi"]
+    if not multi:
+        return {}
+    finished = [m for m in multi if m.finish_agreed is not None]
+    agree = sum(m.finish_agreed is True for m in finished)
+    return {"turns": {
+        "episodes": len(multi), "mean_turns": sum(len(m.attempts) for m in multi) / len(multi),
+        "finished": len(finished), "finish_agree": agree, "finish_false_positives": len(finished) - agree,
+        "finish_agreement": _share(agree, len(finished)),
+        "no_finish": sum(m.stopped == TURNS_USED_UP for m in multi)}}
 
 
 def config_of(rec: Episode) -> tuple[str, str | None]:
