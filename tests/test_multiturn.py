@@ -17,6 +17,7 @@ import pytest
 from capmj.agents.llm_agent.agent import LLMAgent
 from capmj.agents.llm_agent.multiturn import FINISHED, parse_answer, system_prompt
 from capmj.agents.llm_agent.options import LLMAgentOptions
+from capmj.agents.prompt_files import object_names
 from capmj.bench.failures import classify
 from capmj.bench.migrate import as_record
 from capmj.errors import ConfigError
@@ -290,3 +291,59 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     assert replay_check([str(tmp_path / "run")]) == 0
     assert len(server.requests) == 0
+
+
+class _Recorder:
+    """Keeps the episode's text documents and images by path."""
+
+    def __init__(self) -> None:
+        self.texts: dict[str, list[str]] = {}
+        self.images: dict[str, Any] = {}
+
+    def attach(self, world) -> None:  # noqa: ANN001
+        pass
+
+    def frame(self, time, poses) -> None:  # noqa: ANN001
+        pass
+
+    def primitive(self, index, time, info) -> None:  # noqa: ANN001
+        pass
+
+    def text(self, path: str, body: str, time: float | None = None) -> None:
+        self.texts.setdefault(path, []).append(body)
+
+    def image(self, path: str, rgb: Any, time: float | None = None) -> None:
+        self.images[path] = rgb
+
+    def depth(self, path: str, depth: Any, time: float | None = None) -> None:
+        self.images[path] = depth
+
+    def close(self) -> None:
+        pass
+
+
+def test_each_turn_is_logged_as_an_attempt_with_its_feedback_and_views(server: StubLLMServer) -> None:
+    server.respond_with(turns(code(LOOK), "FINISH"))
+    rec = _Recorder()
+    result = run_episode(get_task(TASK), SEED, agent(server, feedback="image"), recorder=rec)
+    first = result.llm.attempts[0]
+    assert rec.texts["llm/attempt1/feedback"] == [first.feedback]
+    assert rec.texts["llm/attempt1/output"] == ["5 blocks"]
+    assert rec.texts["llm/attempt2/planner/1/completion"] == ["FINISH"]
+    views = [p for p in rec.images if p.startswith("llm/attempt1/feedback/after_")]
+    assert len(views) == first.images >= 1
+
+
+def test_under_rgbd_the_feedback_shows_the_perceived_scene_not_the_truth(server: StubLLMServer) -> None:
+    server.respond_with(turns(code(LOOK), "FINISH"))
+    result = episode(agent(server, perception="rgbd"))
+    assert result.perception is not None
+    feedback = result.llm.attempts[0].feedback
+    prompt_objects = [line for line in last_user_text({"messages": server.requests[0]["messages"][:2]})
+                      .splitlines() if line.startswith("objects = ")][-1]  # the question's, after the examples
+    shown_objects = next(line for line in feedback.splitlines() if line.startswith("objects = "))
+    assert shown_objects == prompt_objects  # the planner API's view, as in the planner prompt
+    shown = dict(line[2:].split(": ", 1) for line in feedback.splitlines() if line.startswith("# ") and ": [" in line)
+    assert list(shown) == object_names(shown_objects)
+    truth = {name: str([round(float(v), 3) for v in pose[:3]]) for name, pose in result.final_poses.items()}
+    assert shown != truth  # the cameras' scene (its names and centres), never the simulator's
