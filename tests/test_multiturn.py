@@ -347,3 +347,19 @@ def test_under_rgbd_the_feedback_shows_the_perceived_scene_not_the_truth(server:
     assert list(shown) == object_names(shown_objects)
     truth = {name: str([round(float(v), 3) for v in pose[:3]]) for name, pose in result.final_poses.items()}
     assert shown != truth  # the cameras' scene (its names and centres), never the simulator's
+
+
+def test_describe_model_is_its_own_client_and_its_calls_count(server: StubLLMServer) -> None:
+    server.respond_with(turns(code(LOOK), "FINISH", describe="The robot did not move anything."))
+    result = episode(agent(server, feedback="describe", describe_model="openai/describer"))
+    models = [r.get("model") for r in server.requests]
+    assert models == ["stub", "describer", "stub"]
+    assert result.llm.calls == 3 and result.llm.attempts[0].llm_calls == 2  # the turn's answer and its description
+    assert result.llm.attempts[0].described == "The robot did not move anything."
+
+
+def test_the_episodes_llm_budget_ends_the_turns(server: StubLLMServer) -> None:
+    server.respond_with(lambda request: Reply.answer(code("print('still looking')")))
+    result = episode(agent(server, episode_max_tokens=1000))
+    assert result.llm.stopped == "llm budget" and result.llm.attempts[-1].rule == "llm_budget"
+    assert as_record(result).failure == "budget" and len(result.llm.attempts) < 8
