@@ -75,7 +75,8 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "llm_calls": "LLM calls", "prompt_tokens": "prompt tokens", "completion_tokens": "completion tokens",
     "said": "messages of the plan's say()",
     "finish": "multi-turn only: the answer said FINISH (its code, if any, ran first); absent in single-turn records",
-    "feedback": "multi-turn only: the feedback message's text sent after this turn (None after the last)",
+    "feedback": "multi-turn only: the feedback message's text sent after this turn (None after the last; "
+                "a turn's report stays empty)",
     "images": "multi-turn only: camera images sent with that feedback (0 with --feedback text)",
     "described": "multi-turn --feedback describe only: the describing model's account of what changed",
 }

@@ -249,7 +249,13 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
             before = [len(c.records) for c in clients]
             ran = _turn(session, ctx, api, messages, namespace, goal, k, o.plan_budget)
             error, answer = ran.error, ran.answer
-            predicate = agent._predicate(ctx) if not isinstance(error, LLMError) else (None, None)
+            predicate: tuple[bool | None, float | None] = (None, None)
+            if not isinstance(error, LLMError):
+                try:
+                    ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)  # the state judged, shown and built on
+                except Exception:  # noqa: BLE001 - the runner's final evaluation reports a broken world
+                    pass
+                predicate = agent._predicate(ctx)
             over = meter.exceeded or agent.helper_cap.exceeded
             llm_error = error if isinstance(error, LLMError) else None
             described: str | None = None
@@ -300,7 +306,7 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
                 error_status=error_status,
                 failed_program=failed_program(transcript, k, error_text) if error_text else None,
                 api_error=api_error(error_text, list(ran.calls)), predicate=predicate[0],
-                predicate_progress=predicate[1], rule=rule, report=feedback or "", primitives=ctx.attempt_primitives,
+                predicate_progress=predicate[1], rule=rule, primitives=ctx.attempt_primitives,
                 api_calls=len(ran.calls), llm_calls=len(new), prompt_tokens=sum(r.prompt_tokens for r in new),
                 completion_tokens=sum(r.completion_tokens for r in new), said=ran.said, finish=answer.finish,
                 feedback=feedback, images=images, described=described)
