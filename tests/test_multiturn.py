@@ -28,6 +28,7 @@ from capmj.runner import run_episode
 from capmj.tasks.registry import get_task
 from hostile_plans import HOSTILE_PLANS
 from llm_stub_server import Reply, StubLLMServer, prompt_text
+from test_llm_chain import MemoryRecorder
 
 TASK = "stack-all-blocks-on-a-zone"
 SEED = 10001  # orange zone 1 (target), purple zone 2, blocks 3..7
@@ -293,38 +294,9 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     assert len(server.requests) == 0
 
 
-class _Recorder:
-    """Keeps the episode's text documents and images by path."""
-
-    def __init__(self) -> None:
-        self.texts: dict[str, list[str]] = {}
-        self.images: dict[str, Any] = {}
-
-    def attach(self, world) -> None:  # noqa: ANN001
-        pass
-
-    def frame(self, time, poses) -> None:  # noqa: ANN001
-        pass
-
-    def primitive(self, index, time, info) -> None:  # noqa: ANN001
-        pass
-
-    def text(self, path: str, body: str, time: float | None = None) -> None:
-        self.texts.setdefault(path, []).append(body)
-
-    def image(self, path: str, rgb: Any, time: float | None = None) -> None:
-        self.images[path] = rgb
-
-    def depth(self, path: str, depth: Any, time: float | None = None) -> None:
-        self.images[path] = depth
-
-    def close(self) -> None:
-        pass
-
-
 def test_each_turn_is_logged_as_an_attempt_with_its_feedback_and_views(server: StubLLMServer) -> None:
     server.respond_with(turns(code(LOOK), "FINISH"))
-    rec = _Recorder()
+    rec = MemoryRecorder()
     result = run_episode(get_task(TASK), SEED, agent(server, feedback="image"), recorder=rec)
     first = result.llm.attempts[0]
     assert rec.texts["llm/attempt1/feedback"] == [first.feedback]
