@@ -129,6 +129,19 @@ class UnknownCheckError(PlanError):
     shown_as = "PlanError: NameError"
 
 
+class FunctionNotWritten(PlanError):
+    """LLM code calls a function that ``parse_function`` could not supply: the answer defined other
+    names, or the synthesis depth was reached.  Not a ``NameError`` (it never was)."""
+
+    shown_as = "PlanError: NameError"
+
+
+class ReturnNotSet(PlanError):
+    """A helper LMP's code finished without setting its return variable.  Not a ``NameError``."""
+
+    shown_as = "PlanError: NameError"
+
+
 class BudgetExceeded(PlanError):
     """LLM code used more wall time, API calls or simulation steps than its budget."""
 
@@ -223,6 +236,14 @@ def error_name(exc: BaseException) -> str:
 def describe(exc: BaseException) -> str:
     """``"ErrorClass: message"``, the one form in which errors are recorded and shown to the LLM."""
     return f"{error_name(exc)}: {exc}"
+
+
+def inner_text(exc: BaseException) -> str:
+    """:func:`describe` without a leading ``"PlanError: "``: the text a plan error is quoted with
+    inside another error's message (``"NameError: ..."`` for a class shown as ``PlanError: NameError``,
+    the bare message for one shown as ``PlanError``)."""
+    text = describe(exc)
+    return text[len("PlanError: "):] if text.startswith("PlanError: ") else str(exc)
 
 
 def error_facts(exc: BaseException) -> tuple[str, str | None]:

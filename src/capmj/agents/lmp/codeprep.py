@@ -19,7 +19,7 @@ from collections.abc import Iterator
 
 from capmj.agents.sandbox import FORBIDDEN_NAMES, PROVIDED_NAMES
 from capmj.agents.sandbox.checks import bound_names
-from capmj.errors import PlanError, PlanSyntaxError
+from capmj.errors import FunctionNotWritten, PlanSyntaxError
 
 __all__ = [
     "RESERVED",
@@ -163,6 +163,5 @@ def function_defs(code: str, wanted: str, skip: set[str] | frozenset[str] = froz
             parts.append("\n".join(lines[start - 1:node.end_lineno]))
             names.append(node.name)
     if wanted not in names:
-        raise PlanError(f"NameError: parse_function did not define '{wanted}' "
-                        f"(defined: {names or 'nothing'})")
+        raise FunctionNotWritten(f"parse_function did not define '{wanted}' (defined: {names or 'nothing'})")
     return "\n\n".join(parts) + "\n\n"

@@ -29,7 +29,8 @@ from capmj.agents.prompt_files import PromptFile, load_prompt, load_system_promp
 from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
 from capmj.agents.sandbox.located import WRITTEN_END, WRITTEN_START, located_error
 from capmj.agents.sandbox.sizes import preview, text_length
-from capmj.errors import HelperCallsExceeded, LLMError, PlanError, TextBudgetExceeded, describe
+from capmj.errors import (FunctionNotWritten, HelperCallsExceeded, LLMError, PlanError, ReturnNotSet,
+                          TextBudgetExceeded, describe, inner_text)
 from capmj.record import NullRecorder, Recorder
 
 __all__ = ["ACTION_FUNCTIONS", "DEFAULT_EPISODE_MAX_HELPER_CALLS", "HelperCallCap", "LMPCall", "LMPSession",
@@ -278,8 +279,7 @@ class LMPSession:
         env = env if env is not None else {}
         if depth >= self.max_fn_depth:
             names = ", ".join(m[0] for m in missing)
-            raise PlanError(f"NameError: function synthesis depth {self.max_fn_depth} reached; "
-                            f"undefined: {names}")
+            raise FunctionNotWritten(f"function synthesis depth {self.max_fn_depth} reached; undefined: {names}")
         out: list[str] = []
         known = set(known)
         for name, line, site in missing:
@@ -288,7 +288,7 @@ class LMPSession:
             try:
                 source = self.parse_function(name, site)
             except PlanError as exc:
-                raise located_error(PlanError, f"parse_function could not write {name}(): {exc}",
+                raise located_error(PlanError, f"parse_function could not write {name}(): {inner_text(exc)}",
                                     line=line, code=code, program=program) from exc
             known.add(name)
             inner = undefined_calls(source, known)
@@ -336,7 +336,7 @@ class LMPSession:
         finally:
             self._helper_depth -= 1
         if return_var not in ns:
-            exc = PlanError(f"NameError: {lmp} code did not set '{return_var}'")
+            exc = ReturnNotSet(f"{lmp} code did not set '{return_var}'")
             self.record(call, "error", describe(exc))
             raise exc
         value = ns[return_var]

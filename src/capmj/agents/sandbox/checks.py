@@ -19,7 +19,7 @@ import string
 from collections.abc import Iterator
 
 from capmj.confine.names import FORBIDDEN_ATTRIBUTES
-from capmj.errors import PlanError, PlanSyntaxError, SandboxViolation
+from capmj.errors import PlanSyntaxError, SandboxViolation
 
 FORBIDDEN_NAMES = frozenset({
     "exec", "eval", "compile", "open", "globals", "locals", "vars", "dir", "getattr", "setattr",
@@ -154,8 +154,8 @@ def _check_node(node: ast.AST, line: int | None, bound: set[str], code: str) -> 
 
 def check_code(code: str) -> ast.Module:
     """Parse and allow-list-check ``code``; the AST, or PlanError naming the offending line."""
-    if not isinstance(code, str):
-        raise PlanError(f"TypeError: plan code must be str, not {type(code).__name__}")
+    if not isinstance(code, str):  # a caller's mistake, not the LLM's
+        raise TypeError(f"plan code must be str, not {type(code).__name__}")
     try:
         tree = ast.parse(code, mode="exec")
     except SyntaxError as exc:
