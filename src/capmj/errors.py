@@ -62,6 +62,15 @@ class ConfinementError(PluginError):
     package changed since it was accepted.  Such code never runs outside the jail."""
 
 
+class UnverifiedPackage(ConfinementError):
+    """A generated package is not the package that was accepted (a file added or changed, a module
+    failing the static check, an unreadable or older manifest); ``problems`` says each way."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__("; ".join(problems[:5]))
+        self.problems = problems
+
+
 class GuardRefused(ConfinementError):
     """The runtime guard in the jail refused an event of generated code (``event``, ``detail``)."""
 

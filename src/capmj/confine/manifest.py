@@ -135,55 +135,50 @@ def is_generated(entry: metadata.EntryPoint) -> bool:
     return _generated(entry) or (pkg is not None and (pkg / MANIFEST).is_file())
 
 
-def confinement_problems(entry: metadata.EntryPoint) -> list[str] | None:
-    """``None`` for a package that is not generated; else what fails its confinement (``[]``: nothing)."""
+def _inspect(entry: metadata.EntryPoint) -> tuple[list[str] | None, Path | None, dict[str, Any] | None]:
+    """One verification of ``entry``'s package: ``(problems, package dir, manifest)``; ``problems``
+    is ``None`` for a package that is not generated, and the rest is set only when it is ``[]``."""
     if not is_generated(entry):
-        return None
+        return None, None, None
     pkg = _package_dir(entry)
     if pkg is None:
-        return [f"cannot locate the package of {entry.value!r} to check it"]
+        return [f"cannot locate the package of {entry.value!r} to check it"], None, None
     problems = verify(pkg)
     if problems:
-        return problems
+        return problems, None, None
     body, _ = read_manifest(pkg)
     assert body is not None
     module, _, attr = entry.value.partition(":")
     task = body["tasks"].get(entry.name)
     rel = module.split(".", 1)[1].replace(".", "/") + ".py" if "." in module else ""
     if not isinstance(task, dict) or task.get("module") != rel or attr.strip() != "TASK":
-        return [f"the entry point {entry.name} = {entry.value!r} is not the task {MANIFEST} accepted"]
-    return []
+        return [f"the entry point {entry.name} = {entry.value!r} is not the task {MANIFEST} accepted"], None, None
+    return [], pkg, body
 
 
-def manifest_entry(entry: metadata.EntryPoint) -> dict[str, Any]:
-    """The manifest's record of a verified generated task (call :func:`confinement_problems` first)."""
-    pkg = _package_dir(entry)
-    assert pkg is not None
-    body, _ = read_manifest(pkg)
-    assert body is not None
-    return dict(body["tasks"][entry.name])
+def confinement_problems(entry: metadata.EntryPoint) -> list[str] | None:
+    """``None`` for a package that is not generated; else what fails its confinement (``[]``: nothing)."""
+    return _inspect(entry)[0]
 
 
 def confined_task(entry: metadata.EntryPoint, limits: Limits | None = None) -> ConfinedTask:
     """The verified generated task of ``entry``, runnable only in the jail (starts no process yet).
 
-    Raises :class:`~capmj.errors.ConfinementError` when the package fails :func:`confinement_problems`.
+    Raises :class:`~capmj.errors.UnverifiedPackage` when the package fails :func:`confinement_problems`.
     """
     from capmj.confine.jail import Limits
     from capmj.confine.proxy import ConfinedTask, ModuleSource, TaskFacts
-    from capmj.errors import ConfinementError
+    from capmj.errors import UnverifiedPackage
 
-    problems = confinement_problems(entry)
-    if problems:
-        raise ConfinementError("; ".join(problems[:5]))
-    pkg = _package_dir(entry)
-    assert pkg is not None
-    task = manifest_entry(entry)
+    problems, pkg, body = _inspect(entry)
+    if problems is None:
+        problems = [f"{entry.value!r} is not an LLM-written task package"]
+    if problems or pkg is None or body is None:
+        raise UnverifiedPackage(problems)
+    task = dict(body["tasks"][entry.name])
     text = (pkg / task["module"]).read_text(encoding="utf-8")
-    body, _ = read_manifest(pkg)
-    assert body is not None
     if sha256_text(text) != body["files"][task["module"]]:  # changed between the check and this read
-        raise ConfinementError(f"{task['module']} changed while it was being verified")
+        raise UnverifiedPackage([f"{task['module']} changed while it was being verified"])
     module = entry.value.partition(":")[0]
     goal = task.get("goal") if isinstance(task.get("goal"), str) else None
     return ConfinedTask(ModuleSource(module, text), limits or Limits(), expected=TaskFacts.from_dict(task.get("facts")),
@@ -191,4 +186,4 @@ def confined_task(entry: metadata.EntryPoint, limits: Limits | None = None) -> C
 
 
 __all__ = ["GENERATED_TAG", "MANIFEST", "SCHEMA", "confined_task", "confinement_problems", "is_generated",
-           "manifest_entry", "manifest_text", "read_manifest", "sha256_text", "static_problems", "verify"]
+           "manifest_text", "read_manifest", "sha256_text", "static_problems", "verify"]

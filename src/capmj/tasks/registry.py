@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 from importlib import metadata
 from typing import TYPE_CHECKING, Any, Sequence
 
-from capmj.confine.manifest import confined_task, confinement_problems
-from capmj.errors import ConfigError, ConfinementError, PluginError
+from capmj.confine.manifest import confined_task, confinement_problems, is_generated
+from capmj.errors import ConfigError, ConfinementError, PluginError, UnverifiedPackage
 from capmj.tasks.builtin import RENAMED_TAGS
 from capmj.tasks.scene_method import SCENE_METHOD, scene_method_problem, uses_deprecated_name
 
@@ -206,17 +206,16 @@ class TaskRegistry:
                 raise self._failed[name]
             info = scan.entries[name]
             where = f"task plugin {name!r} from {info.distribution} {info.version} ({info.value})"
-            problems = confinement_problems(scan.points[name])
-            if problems:  # LLM-written code changed since acceptance: it never runs, not even jailed
-                self._failed[name] = ConfinementError(
-                    f"{where} is LLM-written and fails its confinement check, so it is not imported: "
-                    f"{'; '.join(problems[:5])}")
-                raise self._failed[name]
+            point = scan.points[name]
             try:
-                if problems is None:
-                    task = _instantiate(scan.points[name].load())
-                else:  # LLM-written: never imported here, answered by a jailed process
-                    task = confined_task(scan.points[name])
+                if is_generated(point):  # LLM-written: never imported here, answered by a jailed process
+                    task: Task = confined_task(point)
+                else:
+                    task = _instantiate(point.load())
+            except UnverifiedPackage as e:  # changed since acceptance: it never runs, not even jailed
+                self._failed[name] = ConfinementError(
+                    f"{where} is LLM-written and fails its confinement check, so it is not imported: {e}")
+                raise self._failed[name] from None
             except Exception as e:  # anything a foreign module raises at import must stay contained
                 self._failed[name] = PluginError(f"{where} failed to load: {type(e).__name__}: {e}")
                 raise self._failed[name] from e
