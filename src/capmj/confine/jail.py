@@ -31,7 +31,7 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Sequence
+from typing import IO, Callable, Sequence
 
 from capmj.errors import ConfigError, ConfinementError
 
@@ -106,7 +106,7 @@ def jail_command(argv: Sequence[str], limits: Limits | None = None) -> list[str]
     return [*cmd, "--", *argv]
 
 
-def _rlimits(limits: Limits):  # type: ignore[no-untyped-def]
+def _rlimits(limits: Limits) -> Callable[[], None]:
     def apply() -> None:  # in the child between fork and exec of bwrap; the jail inherits them
         resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_s, limits.cpu_s + 2))
         mem = limits.memory_mb << 20

@@ -120,7 +120,9 @@ def write_package(cfg: GenerateConfig, records: Sequence[CandidateRecord]) -> li
         tasks = {}
         for r in acc:  # the exact texts the checks ran on, never a file the checks could have touched
             rel = f"{module_name(r.name or '')}.py"
-            files[rel] = r.text or ""
+            if r.text is None:
+                raise ValueError(f"accepted candidate {r.index} carries no checked text to package")
+            files[rel] = r.text
             tasks[r.name or ""] = {"module": rel, "facts": r.facts, "goal": r.goals[0] if r.goals else "",
                                    "confinement": r.confinement}
         for rel, text in files.items():
