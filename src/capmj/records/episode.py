@@ -113,6 +113,8 @@ class EpisodeResult(Episode):
 class EpisodeRecord(Episode):
     """One line of ``episodes.jsonl``: the result plus its failure label (None: it succeeded) and
     the transcript file its LLM calls were moved to (:mod:`capmj.bench.transcripts`).
+    ``config`` names the configuration of a ``--configs`` grid the episode ran in
+    (:mod:`capmj.bench.configs`); None (and not written) in a run of one unnamed configuration.
 
     ``calls`` is written only while not empty: the grid moves them to ``transcripts/`` first; lines
     written before transcripts existed hold them inline.
@@ -120,13 +122,20 @@ class EpisodeRecord(Episode):
 
     failure: str | None = None
     transcript: str | None = None
+    config: str | None = None
 
-    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"transcript", "perception"})
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"transcript", "perception", "config"})
+
+    @property
+    def grid_key(self) -> tuple[str | None, str, int, str, str | None]:
+        """The identity of an episode in a run folder: its configuration, then :attr:`key`."""
+        return (self.config, *self.key)
 
     @classmethod
-    def of(cls, result: Episode, *, failure: str | None, transcript: str | None = None) -> "EpisodeRecord":
+    def of(cls, result: Episode, *, failure: str | None, transcript: str | None = None,
+           config: str | None = None) -> "EpisodeRecord":
         shared = {f.name: getattr(result, f.name) for f in dataclasses.fields(Episode)}
-        return cls(**shared, failure=failure, transcript=transcript)
+        return cls(**shared, failure=failure, transcript=transcript, config=config)
 
     def to_dict(self) -> dict[str, Any]:
         out = to_plain(self)
