@@ -191,7 +191,7 @@ def _plan(run: RunDir, config: BenchConfig, g: _Grid) -> tuple[list[Job], Budget
             if (t, seed, g.agent_label, g.model) in done:
                 continue
             rrd = str(run.rrd(t, seed, g.agent_label, g.model)) if config.log else None
-            jobs.append(Job(t, seed, rrd))
+            jobs.append(Job(t, seed, rrd, thumb=str(run.thumb(t, seed, g.agent_label, g.model))))
     total = len(g.tasks) * len(g.seeds)
     e = config.execution
     print(f"capmj-bench: {len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "

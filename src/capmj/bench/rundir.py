@@ -2,7 +2,8 @@
 
 A run folder holds ``episodes.jsonl`` (one line per finished episode), ``config.json`` (what the
 run was asked to do, :mod:`capmj.bench.config`), ``summary.{json,md,png}``, one ``.rrd`` log per
-episode under ``rrd/<task>/`` and one LLM-call transcript per episode under ``transcripts/<task>/``.
+episode under ``rrd/<task>/``, one LLM-call transcript per episode under ``transcripts/<task>/``
+and one top-down thumbnail per failed episode under ``thumbs/<task>/``.
 Why one object: the grid, the transcript writer, the CLI and the readers all need these paths, and
 when each built them by hand (one of them by slicing another's string) a change to one silently
 broke another.  :class:`RunDir` is the only place a file name of the folder is written.
@@ -21,6 +22,7 @@ SUMMARY_MD = "summary.md"
 SUMMARY_PNG = "summary.png"
 RRD_DIR = "rrd"
 TRANSCRIPTS_DIR = "transcripts"
+THUMBS_DIR = "thumbs"
 
 
 def safe_name(s: str) -> str:
@@ -76,6 +78,16 @@ class RunDir:
         """``transcripts/<task>/<seed>-<agent>[-<model>].jsonl``, relative to the folder."""
         return f"{TRANSCRIPTS_DIR}/{episode_stem(task, seed, agent, model)}.jsonl"
 
+    @staticmethod
+    def thumb_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
+        """``thumbs/<task>/<seed>-<agent>[-<model>].png``: a failed episode's final top-down view
+        (:mod:`capmj.bench.thumbnail`), relative to the folder."""
+        return f"{THUMBS_DIR}/{episode_stem(task, seed, agent, model)}.png"
+
+    def thumb(self, task: str, seed: int, agent: str, model: str | None) -> Path:
+        """The absolute path of an episode's thumbnail (written for failed episodes only)."""
+        return (self.root / self.thumb_relpath(task, seed, agent, model)).resolve()
+
     def rrd(self, task: str, seed: int, agent: str, model: str | None) -> Path:
         """The absolute path of an episode's ``.rrd`` log."""
         return (self.root / self.rrd_relpath(task, seed, agent, model)).resolve()
@@ -95,4 +107,4 @@ class RunDir:
 
 
 __all__ = ["CONFIG", "EPISODES", "RRD_DIR", "RunDir", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
-           "TRANSCRIPTS_DIR", "episode_stem", "safe_name"]
+           "THUMBS_DIR", "TRANSCRIPTS_DIR", "episode_stem", "safe_name"]

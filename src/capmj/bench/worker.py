@@ -20,6 +20,7 @@ from typing import Any, Mapping, Sequence
 
 from capmj.agents.factory import make_agent
 from capmj.bench.results import sanitize
+from capmj.bench.thumbnail import make_thumbnail
 from capmj.errors import ConfigError, describe, error_facts
 from capmj.llm.gate import set_request_gate
 from capmj.records import EpisodeResult
@@ -28,11 +29,14 @@ from capmj.tasks import registry
 
 @dataclass(frozen=True)
 class Job:
-    """One episode to run: ``rrd`` is the absolute log path, or None for no log."""
+    """One episode to run: ``rrd`` is the absolute log path, or None for no log; ``thumb`` the
+    absolute path of the final top-down view written if the episode fails
+    (:mod:`capmj.bench.thumbnail`), or None for none."""
 
     task: str
     seed: int
     rrd: str | None = None
+    thumb: str | None = None
 
 
 @dataclass(frozen=True)
@@ -138,7 +142,9 @@ class Worker:
                 result = record_episode(task, job.seed, agent, job.rrd, images=self.spec.images)
         except Exception as exc:  # noqa: BLE001 - e.g. the log file cannot be written
             return failed_record(job.task, job.seed, name, model, describe(exc), error_facts(exc)[0])
-        return sanitize(result.to_dict())
+        record = sanitize(result.to_dict())
+        make_thumbnail(job.thumb, task, record)  # failed episodes only; never raises
+        return record
 
     def run_batch(self, jobs: Sequence[Job]) -> list[dict[str, Any]]:
         """Run a batch of episodes concurrently, one thread each (``--concurrency``).
