@@ -189,6 +189,22 @@ class PerceptionFailed(MotionFailed):
     class, recorded as ``error_type``, tells failure attribution that perception caused it."""
 
 
+class UnreachablePose(MotionFailed):
+    """A low-level move (``--api low``) the robot cannot make: no IK solution on its path (out of
+    reach, beyond a joint limit) or a target below the table top.  Refused before the arm moves;
+    ``status`` is ``unreachable`` or ``below_table``."""
+
+    shown_as = None
+
+
+class CollisionDetected(MotionFailed):
+    """A low-level move (``--api low``) touched what it was not meant to: an arm link, the tool or
+    the carried object met the table or an object on the way.  The arm stops there; ``status`` is
+    ``collision``."""
+
+    shown_as = None
+
+
 class UnknownObjectError(AgentError, ValueError):
     """Plan code named an object (or obj_id) the scene does not have.  A ``ValueError`` too, as it
     always was.  ``name`` is the name (or id) as the code wrote it, when known."""

@@ -69,19 +69,29 @@ class EpisodeContext:
     # ------------------------------------------------------------------ acting
     def pick_and_place(self, pick: np.ndarray, place: np.ndarray, place_yaw: float | None = None) -> PrimitiveResult:
         """One budgeted, recorded pick-and-place.  Raises ``BudgetExceeded`` when out of budget."""
-        if self.attempt_primitives >= self.budget.max_primitives:
-            raise BudgetExceeded(f"primitive budget of {self.budget.max_primitives} pick-and-places used up")
-        if self.world.steps - self._attempt_steps0 >= self.budget.max_sim_steps:
-            raise BudgetExceeded(f"simulation budget of {self.budget.max_sim_steps} steps used up")
+        self.check_budget()
         res = self.arm.pick_and_place(np.asarray(pick, float), np.asarray(place, float), place_yaw)
-        self.attempt_primitives += 1
-        self.total_primitives += 1
         if res.ok and res.obj_id is not None:
             self.placements[res.obj_id] = (res.place, res.final_pos)
-        info = asdict(res)
+        self.count_primitive(asdict(res))
+        return res
+
+    def check_budget(self, max_primitives: int | None = None, unit: str = "pick-and-places") -> None:
+        """Raise ``BudgetExceeded`` when the attempt has used ``max_primitives`` primitives (default
+        ``Budget.max_primitives``; ``unit`` names them in the message) or its simulation steps."""
+        limit = self.budget.max_primitives if max_primitives is None else max_primitives
+        if self.attempt_primitives >= limit:
+            raise BudgetExceeded(f"primitive budget of {limit} {unit} used up")
+        if self.world.steps - self._attempt_steps0 >= self.budget.max_sim_steps:
+            raise BudgetExceeded(f"simulation budget of {self.budget.max_sim_steps} steps used up")
+
+    def count_primitive(self, info: dict[str, Any]) -> None:
+        """One primitive done (a pick-and-place, or a move of the low-level API): counted in this
+        attempt and the episode, and sent to the recorder with the attempt number."""
+        self.attempt_primitives += 1
+        self.total_primitives += 1
         info["attempt"] = self.attempt
         self.recorder.primitive(self.total_primitives, self.world.time, info)
-        return res
 
     def reset(self) -> None:
         """Restore the episode's initial state (before a re-plan)."""
