@@ -18,6 +18,11 @@ the ``responder`` hook decides (``callable(request_json) -> str | Reply``, e.g. 
 content in end-to-end tests), else ``default_text``; with neither the server answers HTTP 400
 "stub script exhausted" (not retried by clients, so a test fails loudly instead of looping).
 
+A reply may also carry function calls (``Reply.calls``): streamed, each call arrives in OpenAI's
+delta format (its ``id`` and ``name`` first, then its ``arguments`` text in pieces), else as the
+message's ``tool_calls``.  The ``tools`` a request offered are in its body (:func:`offered_tools`),
+so a responder can build its calls from the schemas it was sent.
+
 Usage tokens in answers are approximate (characters / 4) but always present.
 """
 
@@ -40,6 +45,7 @@ __all__ = [
     "StubLLMServer",
     "completion_body",
     "iter_prompts",
+    "offered_tools",
     "prompt_text",
 ]
 
@@ -64,6 +70,8 @@ class Reply:
     """Streamed requests: seconds between two chunks (one per word of ``text``)."""
     stall_after: int | None = None
     """Streamed requests: after this many chunks, send nothing more (hold the connection)."""
+    tool_calls: tuple[tuple[str, str], ...] = ()
+    """Function calls answered, in order: (name, arguments as JSON text)."""
 
     @staticmethod
     def answer(text: str) -> Reply:
@@ -80,6 +88,13 @@ class Reply:
     @staticmethod
     def raw(body: dict[str, Any]) -> Reply:
         return Reply(body=body)
+
+    @staticmethod
+    def calls(*calls: tuple[str, Any], text: str | None = None) -> Reply:
+        """An answer calling functions: ``(name, arguments)`` pairs, arguments a dict (sent as its
+        JSON) or a JSON text sent as it is; ``text`` the content beside them (None: none)."""
+        return Reply(text=text, tool_calls=tuple((name, args if isinstance(args, str) else json.dumps(args))
+                                                 for name, args in calls))
 
     @staticmethod
     def trickle(text: str, interval_s: float, stall_after: int | None = None) -> Reply:
@@ -123,10 +138,26 @@ def prompt_text(request_json: dict[str, Any]) -> str:
     return "\n".join(_text_of(m.get("content")) for m in messages if isinstance(m, dict))
 
 
-def completion_body(request_json: dict[str, Any], text: str, serial: int) -> dict[str, Any]:
-    """An OpenAI ``chat.completion`` JSON object answering ``text``."""
+def offered_tools(request_json: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The functions a request offered as ``tools``, by name: {name: its JSON Schema ``parameters``}."""
+    return {t["function"]["name"]: t["function"].get("parameters", {}) for t in request_json.get("tools") or ()
+            if isinstance(t, dict) and t.get("type") == "function"}
+
+
+def _call_id(serial: int, index: int) -> str:
+    return f"call_stub_{serial}_{index}"
+
+
+def completion_body(request_json: dict[str, Any], text: str, serial: int,
+                    tool_calls: tuple[tuple[str, str], ...] = ()) -> dict[str, Any]:
+    """An OpenAI ``chat.completion`` JSON object answering ``text`` (and ``tool_calls``)."""
     prompt_tokens = len(prompt_text(request_json)) // 4 + 1
-    completion_tokens = len(text) // 4 + 1
+    completion_tokens = (len(text) + sum(len(n) + len(a) for n, a in tool_calls)) // 4 + 1
+    message: dict[str, Any] = {"role": "assistant", "content": text if text or not tool_calls else None}
+    if tool_calls:
+        message["tool_calls"] = [{"id": _call_id(serial, i), "type": "function",
+                                  "function": {"name": name, "arguments": args}}
+                                 for i, (name, args) in enumerate(tool_calls)]
     return {
         "id": f"chatcmpl-stub-{serial}",
         "object": "chat.completion",
@@ -135,8 +166,8 @@ def completion_body(request_json: dict[str, Any], text: str, serial: int) -> dic
         "choices": [
             {
                 "index": 0,
-                "message": {"role": "assistant", "content": text},
-                "finish_reason": "stop",
+                "message": message,
+                "finish_reason": "tool_calls" if tool_calls else "stop",
             }
         ],
         "usage": {
@@ -278,7 +309,7 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
 
         def _stream(self, body: dict[str, Any], reply: Reply, serial: int) -> None:
             """Server-sent events as OpenAI streams them: one chunk per word, usage, [DONE]."""
-            full = completion_body(body, reply.text or "", serial)
+            full = completion_body(body, reply.text or "", serial, reply.tool_calls)
             self.send_response(200)
             self.send_header("Content-Type", "text/event-stream")
             self.send_header("Cache-Control", "no-cache")
@@ -301,7 +332,17 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
                     send({**base, "choices": [{"index": 0, "delta": delta, "finish_reason": None}]})
                     if reply.token_interval_s and server._stopping.wait(reply.token_interval_s):
                         return
-                send({**base, "choices": [{"index": 0, "delta": {}, "finish_reason": "stop"}]})
+                for index, (name, args) in enumerate(reply.tool_calls):  # OpenAI's pieces of a call
+                    first = {"index": index, "id": _call_id(serial, index), "type": "function",
+                             "function": {"name": name, "arguments": ""}}
+                    pieces = [{"index": index, "function": {"arguments": args[i:i + 7]}} for i in range(0, len(args), 7)]
+                    for piece in [first, *pieces]:
+                        delta = {"tool_calls": [piece]}
+                        if not words and index == 0 and piece is first:
+                            delta["role"] = "assistant"
+                        send({**base, "choices": [{"index": 0, "delta": delta, "finish_reason": None}]})
+                finish = "tool_calls" if reply.tool_calls else "stop"
+                send({**base, "choices": [{"index": 0, "delta": {}, "finish_reason": finish}]})
                 if (body.get("stream_options") or {}).get("include_usage"):
                     send({**base, "choices": [], "usage": full["usage"]})
                 send("[DONE]")
@@ -340,7 +381,7 @@ def _make_handler(server: StubLLMServer) -> type[BaseHTTPRequestHandler]:
             elif body.get("stream"):
                 self._stream(body, reply, serial)
             else:
-                self._send_json(200, completion_body(body, reply.text or "", serial))
+                self._send_json(200, completion_body(body, reply.text or "", serial, reply.tool_calls))
 
     return Handler
 

@@ -7,7 +7,7 @@ from capmj.llm.cache import CompletionCache, cache_key
 from capmj.llm.client import LLMClient
 from capmj.llm.config import LLMConfig
 from capmj.llm.messages import image_part, text_part
-from capmj.llm.records import CallRecord, Completion, Usage
+from capmj.llm.records import CallRecord, Completion, ToolCall, Usage
 
 __all__ = [
     "CallRecord",
@@ -15,6 +15,7 @@ __all__ = [
     "CompletionCache",
     "LLMClient",
     "LLMConfig",
+    "ToolCall",
     "Usage",
     "cache_key",
     "image_part",

@@ -3,7 +3,8 @@
 Why: benchmark runs are repeated (debugging a task, re-scoring, CI) and a temperature-0 answer to
 the same request is worth reusing instead of paying for it again.  The key covers model, api_base,
 the full messages (images included), temperature, max_tokens, the sampling seed and the stop
-sequences (when sent: requests without them keep the keys they had before they were sent), but never the API
+sequences and the offered tools (each only when sent: requests without them keep the keys they had
+before they were sent), but never the API
 key: rotating a key must not invalidate the cache, and secrets must not be derivable from file
 names.
 
@@ -63,6 +64,7 @@ def cache_key(
     max_tokens: int,
     seed: int | None = None,
     stop: Sequence[str] = (),
+    tools: Sequence[Mapping[str, Any]] | None = None,
 ) -> str:
     """sha256 hex digest of the canonical JSON of the request's answer-determining fields."""
     payload: dict[str, Any] = {
@@ -77,6 +79,8 @@ def cache_key(
         payload["seed"] = int(seed)
     if stop:  # absent when none is sent: requests without stops keep their keys
         payload["stop"] = list(stop)
+    if tools:  # likewise: requests without tools keep their keys
+        payload["tools"] = list(tools)
     try:
         canonical = json.dumps(
             payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
@@ -97,7 +101,9 @@ def _valid(record: object, key: str) -> bool:
             return False
         if isinstance(value, float) and not math.isfinite(value):
             return False
-    return True
+    calls = record.get("tool_calls", [])  # [[id, name, arguments], ...], only for answers with calls
+    return isinstance(calls, list) and all(
+        isinstance(c, list) and len(c) == 3 and all(isinstance(x, str) for x in c) for c in calls)
 
 
 class CompletionCache:

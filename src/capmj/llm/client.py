@@ -33,8 +33,8 @@ from capmj.llm.provider import (
     takes_seed,
     text_of,
 )
-from capmj.llm.records import CallRecord, Completion, Usage
-from capmj.llm.stream import StreamCut, cut_answer, drain
+from capmj.llm.records import CallRecord, Completion, ToolCall, Usage
+from capmj.llm.stream import StreamCut, ToolCallParts, cut_answer, drain, tool_calls_of
 
 # LLMConfig and takes_seed are re-exported: tests import them from here.
 __all__ = ["LLMClient", "LLMConfig", "takes_seed"]
@@ -88,6 +88,7 @@ class LLMClient:
             error=error,
             partial=partial,
             cut=c.cut if c else None,
+            tool_calls=len(c.tool_calls) if c else 0,
         )
         with self._lock:
             self._records.append(record)
@@ -95,17 +96,19 @@ class LLMClient:
     # -- the call ---------------------------------------------------------------------------
     def complete(self, messages: Sequence[Message], *, purpose: str = "",
                  mock_response: str | None = None, temperature: float | None = None,
-                 seed: int | None = None, stop: Sequence[str] = ()) -> Completion:
+                 seed: int | None = None, stop: Sequence[str] = (),
+                 tools: Sequence[Mapping[str, Any]] | None = None) -> Completion:
         """Answer ``messages`` (OpenAI chat format), from the cache when possible.
 
         ``temperature`` overrides ``config.temperature`` for this call; ``seed`` asks the provider
         to sample reproducibly (the OpenAI ``seed`` parameter, honoured by OpenAI, llama.cpp,
         Ollama, vLLM; not sent to providers litellm knows do not take it).  ``stop`` sequences end
-        the answer (sent to the provider, and cut here too, for one that ignores them).  All three
-        are part of the cache key.  ``mock_response`` (or ``config.mock_response``) makes litellm answer offline
+        the answer (sent to the provider, and cut here too, for one that ignores them).  ``tools``
+        (OpenAI-format function tools) lets the model answer with calls (``Completion.tool_calls``,
+        with or without text).  All four are part of the cache key.  ``mock_response`` (or ``config.mock_response``) makes litellm answer offline
         without any HTTP; such answers are never cached, so they cannot poison a cache used for
         real runs.  Raises :class:`LLMError` when the provider fails after all retries or answers
-        no text.
+        no text (and no tool call).
         """
         cfg = self.config
         if not messages or not all(isinstance(m, Mapping) and "role" in m for m in messages):
@@ -119,12 +122,14 @@ class LLMClient:
         if not all(isinstance(x, str) and x for x in stop) or len(stop) > 4:
             raise ConfigError(f"stop must be at most 4 non-empty strings (the OpenAI limit), got {stop!r}")
         request: list[dict[str, Any]] = [dict(m) for m in messages]  # copies: the caller's may change
+        offered = [dict(t) for t in tools] if tools else None
         mock = mock_response if mock_response is not None else cfg.mock_response
         start = time.monotonic()
         key = None
         if self._cache is not None and mock is None:
             key = cache_key(model=cfg.model, api_base=cfg.api_base, messages=request,
-                            temperature=temperature, max_tokens=cfg.max_tokens, seed=seed, stop=stop)
+                            temperature=temperature, max_tokens=cfg.max_tokens, seed=seed, stop=stop,
+                            tools=offered)
             stored = self._cache.get(key)
             if stored is not None:
                 hit = Completion(
@@ -133,6 +138,7 @@ class LLMClient:
                     completion_tokens=stored["completion_tokens"],
                     cost_usd=float(stored["cost_usd"]), latency_s=time.monotonic() - start,
                     cached=True, attempts=0, purpose=purpose,
+                    tool_calls=tuple(ToolCall(*c) for c in stored.get("tool_calls", ())),
                 )
                 self._record(hit, purpose=purpose, latency=hit.latency_s, attempts=0)
                 return hit
@@ -144,21 +150,23 @@ class LLMClient:
                 raise miss
         import_litellm()  # seconds on first use; not part of the call's latency
         start = time.monotonic()
-        result, attempts, error = self._call_with_retries(request, mock, temperature, seed, stop)
+        result, calls, attempts, error = self._call_with_retries(request, mock, temperature, seed, stop, offered)
         if error is not None:
             self._record(None, purpose=purpose, latency=time.monotonic() - start,
                          attempts=attempts, error=str(error), partial=error.partial)
             raise error
-        completion = self._to_completion(result, start=start, attempts=attempts, purpose=purpose, stop=stop)
+        completion = self._to_completion(result, start=start, attempts=attempts, purpose=purpose, stop=stop,
+                                         tool_calls=calls)
         if key is not None and self._cache is not None:
             self._store(key, completion)
         self._record(completion, purpose=purpose, latency=completion.latency_s, attempts=attempts)
         return completion
 
     def _call_with_retries(self, messages: list[dict[str, Any]], mock: str | None, temperature: float,
-                           seed: int | None, stop: tuple[str, ...]) -> tuple[Any, int, LLMError | None]:
-        """(response, attempts, None) on success, (None, attempts, error) on final failure; a
-        failed stream's text so far is on the error (``partial``)."""
+                           seed: int | None, stop: tuple[str, ...], tools: list[dict[str, Any]] | None = None,
+                           ) -> tuple[Any, tuple[ToolCall, ...], int, LLMError | None]:
+        """(response, tool calls, attempts, None) on success, (None, (), attempts, error) on final
+        failure; a failed stream's text so far is on the error (``partial``)."""
         cfg = self.config
         litellm = import_litellm()
         kwargs: dict[str, Any] = dict(
@@ -172,19 +180,22 @@ class LLMClient:
             kwargs["mock_response"] = mock
         if stop:
             kwargs["stop"] = list(stop)
+        if tools:
+            kwargs["tools"] = tools
         if cfg.stream:
             kwargs.update(stream=True, stream_options={"include_usage": True})
         total = cfg.max_retries + 1
         partial: str | None = None
         for attempt in range(1, total + 1):
             gate = request_gate()
+            parts = ToolCallParts()
             try:
                 if gate is not None:
                     gate.acquire()
                 try:
                     response = litellm.completion(**kwargs)
                     if cfg.stream:
-                        response = drain(response, litellm, messages)
+                        response = drain(response, litellm, messages, parts)
                 finally:
                     if gate is not None:
                         gate.release()
@@ -204,14 +215,15 @@ class LLMClient:
                 error = LLMError(f"{cfg.model}: {type(exc).__name__}: {short(exc)} "
                                  f"after {attempt} attempt{plural}{got}", partial=partial)
                 error.__cause__ = exc
-                return None, attempt, error
-            if text_of(response) is None:
-                return None, attempt, LLMError(f"{cfg.model}: response has no text content")
-            return response, attempt, None
+                return None, (), attempt, error
+            calls = (parts.calls() if cfg.stream else tool_calls_of(response)) if tools else ()
+            if text_of(response) is None and not calls:
+                return None, (), attempt, LLMError(f"{cfg.model}: response has no text content")
+            return response, calls, attempt, None
         raise AssertionError("unreachable")  # pragma: no cover
 
-    def _to_completion(self, response: Any, *, start: float, attempts: int,
-                       purpose: str, stop: tuple[str, ...] = ()) -> Completion:
+    def _to_completion(self, response: Any, *, start: float, attempts: int, purpose: str,
+                       stop: tuple[str, ...] = (), tool_calls: tuple[ToolCall, ...] = ()) -> Completion:
         usage = getattr(response, "usage", None)
         model = getattr(response, "model", None)
         text, cut = cut_answer(text_of(response) or "", stop)
@@ -226,6 +238,7 @@ class LLMClient:
             cached=False,
             attempts=attempts,
             purpose=purpose,
+            tool_calls=tool_calls,
         )
 
     def _store(self, key: str, c: Completion) -> None:
@@ -233,6 +246,8 @@ class LLMClient:
         record = {"text": c.text, "model": c.model, "prompt_tokens": c.prompt_tokens,
                   "completion_tokens": c.completion_tokens, "cost_usd": c.cost_usd,
                   "latency_s": c.latency_s, "created": time.time()}
+        if c.tool_calls:  # absent without calls: entries stay as they were
+            record["tool_calls"] = [[t.id, t.name, t.arguments] for t in c.tool_calls]
         try:
             self._cache.put(key, record)
         except OSError as exc:  # a full disk must not throw away an answer already paid for

@@ -9,6 +9,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+
+@dataclass(frozen=True)
+class ToolCall:
+    """One function call a model asked for in OpenAI's ``tool_calls`` form: the provider's ``id``
+    (what the ``tool`` message answering it names), the function's ``name`` and its ``arguments``
+    as the JSON text the model wrote (parsed by the caller, which reports bad JSON)."""
+
+    id: str
+    name: str
+    arguments: str
+
+    def to_message(self) -> dict[str, object]:
+        """The call as an assistant message's ``tool_calls`` entry (OpenAI chat format)."""
+        return {"id": self.id, "type": "function", "function": {"name": self.name, "arguments": self.arguments}}
+
+
 @dataclass(frozen=True)
 class Completion:
     """One answer.  A cache hit carries the stored tokens/cost, ``cached=True``, ``attempts=0``."""
@@ -25,6 +41,9 @@ class Completion:
     cut: str | None = None
     """``"repetition"`` when the answer ended in a repetition loop that was cut (see
     :func:`capmj.llm.stream.repetition_cut`); else None."""
+    tool_calls: tuple[ToolCall, ...] = ()
+    """The function calls of an answer to a request that offered ``tools``, in order (an answer
+    with calls may have no text)."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +62,8 @@ class CallRecord:
     error: str | None = None
     partial: str | None = None
     cut: str | None = None
+    tool_calls: int = 0
+    """Function calls in the answer (requests with ``tools`` only)."""
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,20 @@ for nothing (``docs/llm.md``).  No stop
 sequence can end it, because the repeated text is not the next example.  :func:`repetition_cut`
 finds such a loop at the end of the text; the stream is then closed (the server stops writing)
 and the answer keeps one copy of the repeated block.
+
+Why tool calls are assembled here: a streamed answer to a request with ``tools`` sends each call
+in pieces (OpenAI's delta format: the first piece of call ``index`` carries its ``id`` and
+``name``, the next ones chunks of its ``arguments`` text); :class:`ToolCallParts` joins them by
+index, so the calls do not depend on how a provider or litellm rebuilds a stream.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
 from typing import Any
+
+from capmj.llm.records import ToolCall
 
 
 class StreamCut(Exception):
@@ -39,6 +47,60 @@ def _delta(chunk: Any) -> str:
     except (AttributeError, IndexError, KeyError, TypeError):
         return ""
     return content if isinstance(content, str) else ""
+
+
+def _get(obj: Any, name: str) -> Any:
+    """``obj.name`` or ``obj[name]`` (litellm's chunks are objects, a raw delta a dict), else None."""
+    if isinstance(obj, dict):
+        return obj.get(name)
+    return getattr(obj, name, None)
+
+
+@dataclass
+class ToolCallParts:
+    """The tool calls of a stream, joined from their pieces (by ``index``, in order of first
+    appearance): :meth:`add` each chunk, :meth:`calls` at the end."""
+
+    _parts: dict[int, list[str]] = field(default_factory=dict)
+    """index -> [id, name, arguments so far]."""
+
+    def add(self, chunk: Any) -> None:
+        try:
+            deltas = chunk.choices[0].delta.tool_calls
+        except (AttributeError, IndexError, KeyError, TypeError):
+            return
+        for i, delta in enumerate(deltas or ()):
+            index = _get(delta, "index")
+            index = index if isinstance(index, int) and not isinstance(index, bool) else i
+            part = self._parts.setdefault(index, ["", "", ""])
+            function = _get(delta, "function")
+            for slot, value in ((0, _get(delta, "id")), (1, _get(function, "name"))):
+                if isinstance(value, str) and value and not part[slot]:
+                    part[slot] = value
+            arguments = _get(function, "arguments")
+            if isinstance(arguments, str):
+                part[2] += arguments
+
+    def calls(self) -> tuple[ToolCall, ...]:
+        """The calls received (a call without an id gets ``call_<index>``)."""
+        return tuple(ToolCall(i or f"call_{index}", name, arguments)
+                     for index, (i, name, arguments) in sorted(self._parts.items()))
+
+
+def tool_calls_of(response: Any) -> tuple[ToolCall, ...]:
+    """The calls in a whole (not streamed) response's message, in order; () when it has none."""
+    try:
+        raw = response.choices[0].message.tool_calls
+    except (AttributeError, IndexError, KeyError, TypeError):
+        return ()
+    out = []
+    for index, call in enumerate(raw or ()):
+        function = _get(call, "function")
+        name, arguments, id_ = _get(function, "name"), _get(function, "arguments"), _get(call, "id")
+        if isinstance(name, str) and name:
+            out.append(ToolCall(id_ if isinstance(id_, str) and id_ else f"call_{index}", name,
+                                arguments if isinstance(arguments, str) else ""))
+    return tuple(out)
 
 
 REPEATS = {1: 8, 2: 4, 3: 3, 4: 3}
@@ -84,8 +146,10 @@ def _close(stream: Any) -> None:
                 pass
 
 
-def drain(stream: Iterable[Any], litellm: Any, messages: Sequence[Any]) -> Any:
-    """Read ``stream`` to its end and rebuild one response (text and usage) from its chunks.
+def drain(stream: Iterable[Any], litellm: Any, messages: Sequence[Any],
+          tools: ToolCallParts | None = None) -> Any:
+    """Read ``stream`` to its end and rebuild one response (text and usage) from its chunks; the
+    pieces of tool calls go to ``tools`` when given.
 
     Stops early, closing the stream, when the text falls into a repetition loop
     (:func:`repetition_cut`; the caller cuts the text).  Raises :class:`StreamCut` with the text
@@ -96,6 +160,8 @@ def drain(stream: Iterable[Any], litellm: Any, messages: Sequence[Any]) -> Any:
     try:
         for chunk in stream:
             chunks.append(chunk)
+            if tools is not None:
+                tools.add(chunk)
             delta = _delta(chunk)
             parts.append(delta)
             if "\n" in delta and repetition_cut("".join(parts)) is not None:
@@ -124,4 +190,5 @@ def cut_at_stop(text: str, stop: Sequence[str]) -> str:
     return text[: min(ends)] if ends else text
 
 
-__all__ = ["REPEATS", "StreamCut", "cut_answer", "cut_at_stop", "drain", "repetition_cut"]
+__all__ = ["REPEATS", "StreamCut", "ToolCallParts", "cut_answer", "cut_at_stop", "drain", "repetition_cut",
+           "tool_calls_of"]
