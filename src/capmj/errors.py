@@ -236,6 +236,16 @@ class LLMError(AgentError):
         self.partial = partial
 
 
+class ToolCallingUnsupported(ConfigError):
+    """``--policy tools`` with a model that has no tool calling (its provider's model list says
+    so); raised when the agent is built, before any episode, naming the model."""
+
+
+class ToolsRejected(LLMError):
+    """The server answered a request that offered ``tools`` with a refusal of them (its model or
+    its configuration has no tool calling); names the model.  Ends the episode as a provider failure."""
+
+
 class InfrastructureError(CapmjError):
     """The episode could not be run or judged through no fault of the agent (recorded by name;
     the benchmark attributes these to ``infrastructure``)."""
