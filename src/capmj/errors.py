@@ -189,6 +189,15 @@ class PerceptionFailed(MotionFailed):
     class, recorded as ``error_type``, tells failure attribution that perception caused it."""
 
 
+class MotionPlanningError(MotionFailed):
+    """No collision-free path for a move: every straight way would make an arm link, the suction
+    cup or the carried object touch what it is not meant to, and the planner found no way around
+    (or the target itself is inside something).  Raised before the arm moves; ``status`` is
+    ``no_path``.  Failure attribution labels it ``motion``."""
+
+    shown_as = None
+
+
 class UnreachablePose(MotionFailed):
     """A low-level move (``--api low``) the robot cannot make: no IK solution on its path (out of
     reach, beyond a joint limit) or a target below the table top.  Refused before the arm moves;

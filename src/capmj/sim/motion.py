@@ -23,12 +23,18 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
+from capmj.errors import MotionPlanningError
+from capmj.sim.collision import CHECK_STEP, Allowance, CollisionChecker
 from capmj.sim.ik import SuctionIK, arm_inertia_block
 from capmj.sim.line_plan import SegmentPlan, plan_line
 from capmj.sim.motion_config import MotionConfig
+from capmj.sim.planner import plan_joint_path, query_seed
 from capmj.sim.world import World
 
-Status = Literal["ok", "unreachable", "no_grip", "timeout", "held_nothing"]
+Status = Literal["ok", "unreachable", "no_grip", "timeout", "held_nothing", "no_path"]
+
+Waypoints = tuple[tuple[float, float, float], ...]
+"""A polyline of tip positions (m)."""
 
 EXECUTE_MAX_STEPS = 20000
 """Physics steps (40 s simulated) one segment may take at most, a guard against a runaway plan."""
@@ -47,19 +53,45 @@ class PrimitiveResult:
     steps: int = 0
     sim_s: float = 0.0
     message: str = ""
+    planned: tuple[Waypoints, ...] = ()
+    """Tip polylines of the moves that were planned around an obstacle (none when every straight
+    move was clear), for drawing."""
+
+
+@dataclass(frozen=True)
+class PathRecord:
+    """One move as executed: its joint waypoints (rows) and the tip at each, and whether it was
+    planned around an obstacle (else straight tool lines or a straight joint move)."""
+
+    joints: np.ndarray
+    tip: Waypoints
+    planned: bool
 
 
 class Motion:
     """Motion primitives over one :class:`World`."""
 
-    def __init__(self, world: World, config: MotionConfig | None = None) -> None:
+    def __init__(self, world: World, config: MotionConfig | None = None, seed: int = 0) -> None:
         self.world = world
         self.cfg = config or MotionConfig()
+        self.seed = seed
         m = world.model
         self.ik = SuctionIK(m, world.tip_site, world.arm_qpos, world.arm_dof)
         gain = m.actuator_gainprm[:6, 0]
         self._ff = -m.actuator_biasprm[:6, 2] / gain  # kv / kp per joint
         self._kp = gain
+        self._checker: CollisionChecker | None = None
+        self.paths: list[PathRecord] = []
+        """Every move made so far, in order (see :class:`PathRecord`)."""
+        self.planning_s = 0.0
+        """Wall seconds spent checking and planning paths so far (for the benchmark)."""
+
+    @property
+    def checker(self) -> CollisionChecker:
+        """The collision checker of this world (made on first use)."""
+        if self._checker is None:
+            self._checker = CollisionChecker(self.world, self.cfg.plan_clearance)
+        return self._checker
 
     # ------------------------------------------------------------------ segments
     def plan_line(self, start: np.ndarray, end: np.ndarray, yaw0: float, yaw1: float, speed: float,
@@ -190,6 +222,11 @@ class Motion:
         concern the last line only.  Returns (status, steps, index of the line that could not be
         planned or -1); every line is planned before the arm moves, so "unreachable" moves nothing.
 
+        With ``plan_collisions`` every line is checked for collisions first (:meth:`clear_legs`):
+        one that is not clear is replaced by a joint-space path around the obstacle, and
+        :class:`~capmj.errors.MotionPlanningError` is raised, before anything moves, when there is
+        none.  A guarded last line (``stop`` given) may end touching what is under its end.
+
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
         """
@@ -205,6 +242,7 @@ class Motion:
                 return "unreachable", 0, k
             plans.append(plan)
             start, q, yaw_prev = pos, plan.qs[-1], yaw
+        plans = self.clear_legs(plans, guarded=stop is not None)
         # Each line's inertia term uses the arm's inertia where that line starts; a blend adds the
         # two lines' references, velocities and inertia terms over the overlap.
         ref_q, ref_v, acc, path = self._reference(plans[0])
@@ -228,3 +266,133 @@ class Motion:
         self.world.set_arm_ctrl(plans[-1].qs[-1])
         stopped, more = self.converge(np.asarray(points[-1][0], float), stop)
         return ("stopped" if stopped else "ok"), steps + more, -1
+
+    # ------------------------------------------------------------------ planned moves
+    def move_joints(self, q_goal: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[str, int]:
+        """Move the arm to joints ``q_goal``: straight in joint space when that is clear, else on a
+        path planned around the obstacle (:meth:`clear_legs`).  Returns ("ok" | "stopped" |
+        "unreachable", steps); "unreachable" (beyond a joint limit) moves nothing.  Raises
+        :class:`~capmj.errors.MotionPlanningError` before moving when no clear path exists."""
+        q_goal = np.asarray(q_goal, float)
+        if q_goal.shape != (6,) or not np.all(np.isfinite(q_goal)) \
+                or np.any(q_goal < self.ik.lo) or np.any(q_goal > self.ik.hi):
+            return "unreachable", 0
+        plan = self.joint_plan(np.array([self.world.arm_ctrl(), q_goal]))
+        plan = self.clear_legs([plan], guarded=stop is not None)[0]
+        stopped, steps = self.execute(plan, stop)
+        if stopped:
+            return "stopped", steps
+        stopped, more = self.converge(self.ik.tip_position(q_goal), stop)
+        return ("stopped" if stopped else "ok"), steps + more
+
+    def move_to_pose(self, pos: np.ndarray, yaw: float, stop: Callable[[], bool] | None = None,
+                     speed: float | None = None) -> tuple[str, int]:
+        """Move the tip to ``pos`` pointing down with tool ``yaw``, by the most direct clear way: a
+        straight tool line when it is reachable (planned around an obstacle when it is not clear,
+        as :meth:`move_through`), else a joint-space move to the IK solution nearest the current
+        joints (:meth:`move_joints`).  Returns ("ok" | "stopped" | "unreachable", steps);
+        "unreachable" (no IK solution) moves nothing.  Raises
+        :class:`~capmj.errors.MotionPlanningError` before moving when no clear path exists."""
+        pos = np.asarray(pos, float)
+        status, steps, _ = self.move_through([(pos, yaw)], speed, stop)
+        if status != "unreachable":
+            return status, steps
+        res = self.ik.solve(pos, yaw, self.world.arm_ctrl())
+        if res.q is None:
+            return "unreachable", 0
+        return self.move_joints(res.q, stop)
+
+    def joint_plan(self, waypoints: np.ndarray) -> SegmentPlan:
+        """A timed joint-space move through ``waypoints`` (rows), straight in joint space between
+        them and at rest at each: every edge a smoothstep within the joint speed and acceleration
+        limits (peak speed 1.5 d / T, peak acceleration 6 d / T^2 for the largest joint change d)."""
+        cfg = self.cfg
+        wp = np.asarray(waypoints, float)
+        parts = [wp[:1]]
+        for a, b in zip(wp, wp[1:]):
+            d = float(np.max(np.abs(b - a)))
+            duration = max(1.5 * d / cfg.joint_speed, float(np.sqrt(6.0 * d / cfg.joint_accel)), cfg.ik_dt)
+            n = max(1, int(np.ceil(duration / cfg.ik_dt)))
+            s = np.linspace(0.0, 1.0, n + 1)[1:]
+            s = s * s * (3 - 2 * s)
+            parts.append(a + s[:, None] * (b - a))
+        return SegmentPlan(np.concatenate(parts), cfg.ik_dt)
+
+    def clear_legs(self, plans: list[SegmentPlan], guarded: bool = False) -> list[SegmentPlan]:
+        """The legs of one move (consecutive plans, each starting where the last ends), each
+        checked for collisions densely (:class:`~capmj.sim.collision.CollisionChecker`) and, when
+        not clear, replaced by a joint-space path around the obstacle (:mod:`capmj.sim.planner`).
+
+        What may touch: the pairs touching where the move starts (first leg only), and for a
+        ``guarded`` move (one that stops at contact) on its last leg the cup and the carried
+        object may touch what they touch where that leg ends (the object being picked, the
+        surface being placed on) and the table; that last leg is never replaced (its end is the
+        contact the move is for).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg
+        is not clear and cannot be replaced.  Records each leg in :attr:`paths`.  With
+        ``plan_collisions`` off the legs are returned unchecked (and recorded).
+        """
+        import time
+
+        if not self.cfg.plan_collisions:
+            for plan in plans:
+                self._record(plan, planned=False)
+            return plans
+        t0 = time.perf_counter()
+        try:
+            return self._clear_legs(plans, guarded)
+        finally:
+            self.planning_s += time.perf_counter() - t0
+
+    def _clear_legs(self, plans: list[SegmentPlan], guarded: bool) -> list[SegmentPlan]:
+        from capmj.sim.collision import TABLE
+
+        chk = self.checker
+        chk.sync()
+        start = Allowance(pairs=chk.touching(plans[0].qs[0]))
+        out: list[SegmentPlan] = []
+        records: list[tuple[SegmentPlan, bool]] = []
+        for i, plan in enumerate(plans):
+            allow = start if i == 0 else Allowance()
+            last_guarded = guarded and i == len(plans) - 1
+            if last_guarded:
+                allow = allow | Allowance(tool_may_touch=chk.tool_owners(plan.qs[-1]) | {TABLE})
+            hit = chk.path_collision(plan.qs, allow)
+            if hit is None:
+                out.append(plan)
+                records.append((plan, False))
+                continue
+            where = self.ik.tip_position(plan.qs[-1])
+            target = f"({where[0]:.3f}, {where[1]:.3f}, {where[2]:.3f})"
+            if last_guarded:
+                raise MotionPlanningError(f"no collision-free path to {target}: {hit[1]}", status="no_path")
+            around = self._plan_around(plan.qs[0], plan.qs[-1], allow)
+            if around is None:
+                raise MotionPlanningError(f"no collision-free path to {target}: {hit[1]} on the straight way, and "
+                                          "no way around it was found", status="no_path")
+            joint = self.joint_plan(around)
+            out.append(joint)
+            records.append((joint, True))
+        for plan, planned in records:
+            self._record(plan, planned)
+        return out
+
+    def _plan_around(self, q_a: np.ndarray, q_b: np.ndarray, allow: Allowance) -> np.ndarray | None:
+        """Joint waypoints from ``q_a`` to ``q_b`` clear under ``allow``, or None."""
+        chk = self.checker
+
+        def valid(q: np.ndarray) -> bool:
+            return chk.collision(q, allow) is None
+
+        def edges_clear(waypoints: np.ndarray) -> bool:
+            return chk.path_collision(waypoints, allow) is None
+
+        seed = query_seed(self.seed, q_a, q_b, self.world.data.qpos)
+        path = plan_joint_path(valid, edges_clear, q_a, q_b, self.ik.lo, self.ik.hi, seed, CHECK_STEP,
+                               self.cfg.plan_max_checks)
+        return None if path is None else path.waypoints
+
+    def _record(self, plan: SegmentPlan, planned: bool) -> None:
+        """Keep one leg in :attr:`paths` (its tip drawn at every sample when planned, else its ends)."""
+        qs = plan.qs if planned else plan.qs[[0, -1]]
+        tip = tuple(tuple(float(v) for v in self.ik.tip_position(q)) for q in qs)
+        self.paths.append(PathRecord(qs.copy(), tip, planned))  # type: ignore[arg-type]

@@ -18,7 +18,8 @@ class MotionConfig:
     per rad turns the largest placement turn (45°) into ~8 cm.  ``retreat`` is how far the tip at
     least rises straight up after letting go (after a place it rises on to the next primitive's
     transit height, see :meth:`capmj.sim.primitives.Primitives.transit_height`), so the cup leaves
-    the released object vertically before the next move goes sideways."""
+    the released object vertically before the next move goes sideways.  ``plan_collisions`` off
+gives the straight moves alone, unchecked (the motion before planning, for comparison)."""
 
     speed: float = 1.2            # m/s, free-space tip speed
     accel: float = 8.0            # m/s^2
@@ -42,3 +43,6 @@ class MotionConfig:
     track_tol: float = 0.002      # m tip error accepted at a segment end
     retreat: float = 0.1          # m the tip rises after a release
     blend: float = 0.02           # m within which a corner of a multi-line move is rounded
+    plan_collisions: bool = True  # check every move for collisions and plan around them (capmj.sim.collision)
+    plan_clearance: float = 0.005  # m kept between the arm, tool or carried object and what they must not touch
+    plan_max_checks: int = 30000  # configuration checks one planning query may spend before it fails

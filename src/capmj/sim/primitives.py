@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from capmj.errors import MotionPlanningError
 from capmj.sim.carry import sloped_transit
-from capmj.sim.motion import Motion, PrimitiveResult
+from capmj.sim.motion import Motion, PrimitiveResult, Waypoints
 from capmj.sim.motion_config import MotionConfig
 from capmj.sim.robot import CUP_RADIUS
 from capmj.sim.world import World
@@ -27,6 +28,11 @@ _QUARTER = math.pi / 2
 
 AT_HEIGHT_TOL = 1e-3
 """m: a tip this close below the transit height is already there; it does not rise first."""
+
+PLACE_INSIDE_TOL = 0.005
+"""m: a place target (given with its height) that puts the carried object deeper than this into
+anything is inside it: refused as ``no_path`` before the carry (an exact place on a surface touches
+it, within a few millimetres of its height)."""
 
 YAW_QUARTER_TURNS = range(-4, 5)
 """Quarter turns tried around the current yaw when choosing a pick yaw: up to a full turn either
@@ -66,9 +72,9 @@ def _wrap(a: float, period: float) -> float:
 class Primitives:
     """Pick-and-place over one world; keeps the wrist yaw between calls."""
 
-    def __init__(self, world: World, config: MotionConfig | None = None) -> None:
+    def __init__(self, world: World, config: MotionConfig | None = None, seed: int = 0) -> None:
         self.world = world
-        self.motion = Motion(world, config)
+        self.motion = Motion(world, config, seed)
         self.cfg = self.motion.cfg
 
     # ------------------------------------------------------------------ geometry
@@ -151,7 +157,7 @@ class Primitives:
         object's final yaw (blocks are symmetric every 90°), None to keep its orientation.
         """
         w = self.world
-        steps0, t0 = w.steps, w.time
+        steps0, t0, paths0 = w.steps, w.time, len(self.motion.paths)
         pick = np.asarray(pick, float)
         place = np.asarray(place, float)
         pick_t = (float(pick[0]), float(pick[1]), float(pick[2]) if len(pick) > 2 else 0.0)
@@ -159,8 +165,9 @@ class Primitives:
 
         def result(status: str, obj: int | None, msg: str = "") -> PrimitiveResult:
             final = tuple(float(v) for v in w.pose(obj).pos) if obj is not None else None
+            planned: tuple[Waypoints, ...] = tuple(p.tip for p in self.motion.paths[paths0:] if p.planned)
             return PrimitiveResult(status == "ok", status, obj, pick_t, place_t, final,  # type: ignore[arg-type]
-                                   w.steps - steps0, w.time - t0, msg)
+                                   w.steps - steps0, w.time - t0, msg, planned)
 
         if w.suction.held is not None:
             w.suction.release()
@@ -181,18 +188,21 @@ class Primitives:
         w, m, cfg = self.world, self.motion, self.cfg
         transit = self.transit_height()
         tip = w.tip_pose()[0]
-        if tip[2] < transit - AT_HEIGHT_TOL:
-            if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
-                return _Failure("unreachable", None, "cannot rise to transit height")
-        m.unwind_wrist()
-        yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
-        over_pick = np.array([pick[0], pick[1], transit])
-        surface = self.coarse_top_under(pick[:2])
-        touching = lambda: w.suction.touching() is not None  # noqa: E731
-        status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
-                                        stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
-        if status == "unreachable" and (leg == 0 or m.move_to(over_pick, yaw)[0] == "unreachable"):
-            return _Failure("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
+        try:
+            if tip[2] < transit - AT_HEIGHT_TOL:
+                if m.move_to(np.array([tip[0], tip[1], transit]), m.commanded_yaw())[0] == "unreachable":
+                    return _Failure("unreachable", None, "cannot rise to transit height")
+            m.unwind_wrist()
+            yaw = self._unwound_yaw(np.array([pick[0], pick[1], transit]))
+            over_pick = np.array([pick[0], pick[1], transit])
+            surface = self.coarse_top_under(pick[:2])
+            touching = lambda: w.suction.touching() is not None  # noqa: E731
+            status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
+                                            stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
+            if status == "unreachable" and (leg == 0 or m.move_to(over_pick, yaw)[0] == "unreachable"):
+                return _Failure("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
+        except MotionPlanningError as exc:
+            return _Failure("no_path", None, f"pick at {pick_t[:2]}: {exc}")
         obj = w.suction.grip()
         if obj is None:
             m.move_to(over_pick, yaw)
@@ -227,8 +237,47 @@ class Primitives:
         """Step 3: lift, carry and go down until the carried object touches (one move, corners
         rounded; on a slope where the lift straight up is out of reach); the tip height over the
         place point, where the retreat rises back to, or why not (the object then put back)."""
+        try:
+            return self._carry_moves(obj, carry, pick, place_t)
+        except MotionPlanningError as exc:
+            self._let_go_here(carry.yaw)
+            return _Failure("no_path", obj, f"place at {place_t[:2]}: {exc}; object put back")
+
+    def _let_go_here(self, yaw: float) -> None:
+        """After a carry found no path (nothing moved since the grip): let go where the object was
+        picked, rise and let the objects come to rest."""
+        w, m, cfg = self.world, self.motion, self.cfg
+        w.suction.release()
+        w.step(cfg.release_dwell_steps)
+        tip = w.tip_pose()[0]
+        try:
+            m.move_to(np.array([tip[0], tip[1], tip[2] + cfg.retreat]), yaw)
+        except MotionPlanningError:
+            pass  # the arm stays where it let go
+        w.settle(cfg.settle_steps, cfg.settle_tol)
+
+    def _check_place(self, obj: int, carry: _Carry, place_t: tuple[float, float, float]) -> None:
+        """Refuse a place target given with its height that puts the carried object inside
+        something (deeper than :data:`PLACE_INSIDE_TOL`): raises MotionPlanningError."""
+        m = self.motion
+        if not self.cfg.plan_collisions or math.isnan(place_t[2]):
+            return
+        target = carry.down + np.array([0.0, 0.0, self.cfg.overshoot])
+        res = m.ik.solve(target, carry.new_yaw, self.world.arm_ctrl())
+        if res.q is None:
+            return  # out of reach: the carry reports it
+        m.checker.sync()
+        inside = m.checker.tool_inside(res.q, PLACE_INSIDE_TOL)
+        if inside is not None:
+            raise MotionPlanningError(f"the place target {tuple(round(v, 3) for v in place_t)} is inside something: "
+                                      f"{inside}", status="no_path")
+
+    def _carry_moves(self, obj: int, carry: _Carry, pick: np.ndarray, place_t: tuple[float, float, float]
+                     ) -> _Failure | float:
+        """The moves of :meth:`_carry` (which catches a MotionPlanningError they raise)."""
         w, m, cfg = self.world, self.motion, self.cfg
         tip, transit, yaw, new_yaw, tip_xy, down = carry.tip, carry.transit, carry.yaw, carry.new_yaw, carry.tip_xy, carry.down
+        self._check_place(obj, carry, place_t)
         placed = w.suction.held_touches_other
         place_z = transit  # the tip height over the place point, where the retreat rises back to
         legs = [(np.array([tip[0], tip[1], transit]), yaw), (np.array([tip_xy[0], tip_xy[1], transit]), new_yaw),
@@ -267,6 +316,9 @@ class Primitives:
         # vertical move instead of a retreat that stops and a rise that starts again.
         tip = w.tip_pose()[0]
         up = min(place_z, tip[2] + cfg.retreat)
-        if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), yaw)[0] == "unreachable":
-            m.move_to(np.array([tip[0], tip[1], up]), yaw)
+        try:
+            if m.move_to(np.array([tip[0], tip[1], max(up, self.transit_height())]), yaw)[0] == "unreachable":
+                m.move_to(np.array([tip[0], tip[1], up]), yaw)
+        except MotionPlanningError:
+            pass  # the arm stays over the placed object; the next move starts from there
         w.settle(cfg.settle_steps, cfg.settle_tol)

@@ -1,0 +1,249 @@
+"""Collision checking of arm configurations on MuJoCo's own collision detection.
+
+A :class:`CollisionChecker` owns a scratch copy of the world's model and data: a configuration is
+checked by writing the arm's joints there, running forward kinematics, moving the carried object
+rigidly with the suction body, and asking ``mj_collision`` for contacts.  The live world is never
+touched, so checking a whole path costs no physics step.
+
+What counts: the *moving* geoms (the arm's collision geoms, the suction cup and the carried
+object's geoms) against the *static* ones (the table and every object not carried).  The scratch
+model's contact bits are set so that only such pairs are ever tested (static-static contacts such
+as a block resting on another are not computed at all; the arm's own links are kept apart by its
+joint limits and are not checked).  Every moving geom gets a margin of ``clearance``: a pair
+closer than that is a collision, so a path keeps that much room where nothing is meant to touch.
+
+What is meant to touch is the caller's :class:`Allowance`: the pairs already touching where the
+move starts (the carried object on its support at a lift, the cup on the object it just let go),
+and for a guarded descent the objects under where it ends (the object being picked, the surface
+being placed on), which only the cup and the carried object may touch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from capmj.sim.robot import ARM_BODIES, SUCTION_BODY
+from capmj.sim.world import World
+
+CLEARANCE = 0.005
+"""m: room kept between a moving geom and a static one where they are not meant to touch."""
+
+CHECK_STEP = 0.01
+"""rad: the largest change of any joint between two configurations checked along a path (about
+8 mm at the tool for the base joint at full reach: less than a block's half edge)."""
+
+TABLE = 0
+"""The owner id of the table (the floor plane) in an :class:`Allowance`."""
+
+_STATIC_BITS, _MOVING_BITS = (1, 2), (2, 1)
+"""(contype, conaffinity) of static and moving geoms in the scratch model: a pair collides when
+``contype1 & conaffinity2 or contype2 & conaffinity1``, so only moving-static pairs do."""
+
+
+@dataclass(frozen=True)
+class Allowance:
+    """What a move may touch.  ``pairs``: (moving geom, static geom) pairs that may touch (those in
+    contact where the move starts).  ``tool_may_touch``: owner ids (object ids, :data:`TABLE` for
+    the table) that the cup and the carried object, but no arm link, may touch."""
+
+    pairs: frozenset[tuple[int, int]] = frozenset()
+    tool_may_touch: frozenset[int] = frozenset()
+
+    def __or__(self, other: "Allowance") -> "Allowance":
+        return Allowance(self.pairs | other.pairs, self.tool_may_touch | other.tool_may_touch)
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A contact that was not meant to happen: which part (a link, the cup, the carried object)
+    touched what (an object's name or ``the table``), and the distance (m; negative: penetration)."""
+
+    part: str
+    other: str
+    dist: float
+    moving_geom: int
+    static_geom: int
+
+    def __str__(self) -> str:
+        depth = f"{-self.dist * 100:.1f} cm deep" if self.dist < 0 else f"{self.dist * 1000:.0f} mm close"
+        return f"{self.part} would touch {self.other} ({depth})"
+
+
+class CollisionChecker:
+    """Checks arm configurations of one world against its objects as they are now (see the module
+    docstring).  Call :meth:`sync` after the world changed (an object moved, a grip or release)."""
+
+    def __init__(self, world: World, clearance: float = CLEARANCE) -> None:
+        self.world = world
+        self.clearance = clearance
+        m = world.model
+        self.model = _copy_model(m)
+        self.data = mujoco.MjData(self.model)
+        # The shoulder link only turns about its own vertical axis next to the base: it never
+        # moves towards anything, and it always sits within the clearance of the table.
+        robot_bodies = {m.body(n).id for n in (*ARM_BODIES, SUCTION_BODY) if n != "shoulder_link"}
+        collides = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
+        self._robot_geoms = np.flatnonzero(collides & np.isin(m.geom_bodyid, list(robot_bodies)))
+        self._object_geoms = np.flatnonzero(collides & (world.geom_obj > 0))
+        self._table_geoms = np.flatnonzero(collides & (world.geom_obj == 0)
+                                           & ~np.isin(np.arange(m.ngeom), self._robot_geoms))
+        self._suction_body = m.body(SUCTION_BODY).id
+        self._qadr = world.arm_qpos
+        self._held: int | None = None
+        self._held_geoms = np.empty(0, dtype=int)
+        self._held_qadr = -1
+        self._held_rel_pos = np.zeros(3)
+        self._held_rel_mat = np.eye(3)
+        self._quat = np.zeros(4)
+        self._names = self._part_names()
+        self.checks = 0
+        """Configurations checked so far (a deterministic measure of planning effort)."""
+        self.sync()
+
+    def _part_names(self) -> dict[int, str]:
+        m, w = self.model, self.world
+        names: dict[int, str] = {}
+        for g in self._robot_geoms:
+            body = m.body(int(m.geom_bodyid[g])).name
+            names[int(g)] = "the suction cup" if int(g) == w.cup_geom else f"the arm's {body}"
+        for g in self._object_geoms:
+            names[int(g)] = f"the {w.objects_by_id[int(w.geom_obj[g])].name}"
+        for g in self._table_geoms:
+            names[int(g)] = "the table"
+        return names
+
+    # ------------------------------------------------------------------ state
+    def sync(self) -> None:
+        """Copy the world's object poses and grip into the scratch model and data."""
+        w, m, d = self.world, self.model, self.data
+        d.qpos[:] = w.data.qpos
+        mujoco.mj_kinematics(m, d)
+        held = w.suction.held
+        self._held = held
+        self._held_geoms = self._object_geoms[w.geom_obj[self._object_geoms] == held] if held is not None \
+            else np.empty(0, dtype=int)
+        moving = np.concatenate([self._robot_geoms, self._held_geoms])
+        m.geom_contype[:], m.geom_conaffinity[:] = 0, 0
+        m.geom_margin[:] = 0.0
+        for geoms, (ctype, caff) in ((np.concatenate([self._object_geoms, self._table_geoms]), _STATIC_BITS),
+                                     (moving, _MOVING_BITS)):
+            m.geom_contype[geoms], m.geom_conaffinity[geoms] = ctype, caff
+        m.geom_margin[moving] = self.clearance
+        self._moving = np.zeros(m.ngeom, dtype=bool)
+        self._moving[moving] = True
+        self._tool = np.zeros(m.ngeom, dtype=bool)
+        self._tool[[w.cup_geom, *self._held_geoms.tolist()]] = True
+        for b in range(m.nbody):
+            m.body_contype[b] = int(np.bitwise_or.reduce(m.geom_contype[m.geom_bodyid == b], initial=0))
+            m.body_conaffinity[b] = int(np.bitwise_or.reduce(m.geom_conaffinity[m.geom_bodyid == b], initial=0))
+        # The carried body's pose in the suction body's frame (live data: the weld holds it).
+        self._held_qadr = w.free_qpos[held] if held is not None else -1
+        if held is not None:
+            sp, sr = w.data.xpos[self._suction_body], w.data.xmat[self._suction_body].reshape(3, 3)
+            b = w.body_of[held]
+            self._held_rel_pos = sr.T @ (w.data.xpos[b] - sp)
+            self._held_rel_mat = sr.T @ w.data.xmat[b].reshape(3, 3)
+
+    @property
+    def held(self) -> int | None:
+        """The object carried at the last :meth:`sync` (it moves with the cup)."""
+        return self._held
+
+    def _pose(self, q: np.ndarray) -> None:
+        """Forward kinematics of arm joints ``q`` with the carried object following the cup (its
+        free joint set from the suction body's pose, then the kinematics run again, so the
+        collision broadphase sees the carried body where it is)."""
+        m, d = self.model, self.data
+        d.qpos[self._qadr] = q
+        mujoco.mj_kinematics(m, d)
+        a = self._held_qadr
+        if a >= 0:
+            sp, sr = d.xpos[self._suction_body], d.xmat[self._suction_body].reshape(3, 3)
+            d.qpos[a:a + 3] = sp + sr @ self._held_rel_pos
+            mujoco.mju_mat2Quat(self._quat, (sr @ self._held_rel_mat).ravel())
+            d.qpos[a + 3:a + 7] = self._quat
+            mujoco.mj_kinematics(m, d)
+
+    def contacts(self, q: np.ndarray) -> list[tuple[int, int, float]]:
+        """Every (moving geom, static geom, distance) pair within ``clearance`` at joints ``q``."""
+        m, d = self.model, self.data
+        self._pose(q)
+        mujoco.mj_collision(m, d)
+        self.checks += 1
+        n = d.ncon
+        if n == 0:
+            return []
+        geoms, dists = d.contact.geom[:n], d.contact.dist[:n]
+        swap = self._moving[geoms[:, 1]]
+        first = np.where(swap, geoms[:, 1], geoms[:, 0])
+        second = np.where(swap, geoms[:, 0], geoms[:, 1])
+        return list(zip(first.tolist(), second.tolist(), dists.tolist()))
+
+    def owner(self, static_geom: int) -> int:
+        """The owner id of a static geom: its object id, or :data:`TABLE`."""
+        return int(self.world.geom_obj[static_geom])
+
+    def _tool_geom(self, g: int) -> bool:
+        return bool(self._tool[g])
+
+    # ------------------------------------------------------------------ queries
+    def collision(self, q: np.ndarray, allow: Allowance = Allowance()) -> Collision | None:
+        """The closest contact at joints ``q`` that ``allow`` does not cover, or None if clear."""
+        worst: Collision | None = None
+        for g1, g2, dist in self.contacts(q):
+            if (g1, g2) in allow.pairs:
+                continue
+            if self._tool_geom(g1) and self.owner(g2) in allow.tool_may_touch:
+                continue
+            if worst is None or dist < worst.dist:
+                part = f"the carried {self._names[g1][4:]}" if self._tool[g1] and g1 != self.world.cup_geom \
+                    else self._names[g1]
+                worst = Collision(part, self._names.get(g2, "the table"), dist, g1, g2)
+        return worst
+
+    def tool_inside(self, q: np.ndarray, depth: float) -> Collision | None:
+        """The deepest penetration of the cup or the carried object into anything at joints ``q``
+        when it is deeper than ``depth`` (m), else None: a target pose inside an object."""
+        worst: Collision | None = None
+        for g1, g2, dist in self.contacts(q):
+            if self._tool[g1] and dist < -depth and (worst is None or dist < worst.dist):
+                part = f"the carried {self._names[g1][4:]}" if g1 != self.world.cup_geom else self._names[g1]
+                worst = Collision(part, self._names.get(g2, "the table"), dist, g1, g2)
+        return worst
+
+    def touching(self, q: np.ndarray) -> frozenset[tuple[int, int]]:
+        """The (moving, static) geom pairs within ``clearance`` at joints ``q`` (to allow at a start)."""
+        return frozenset((g1, g2) for g1, g2, _ in self.contacts(q))
+
+    def tool_owners(self, q: np.ndarray) -> frozenset[int]:
+        """Owner ids the cup or the carried object is within ``clearance`` of at joints ``q``."""
+        return frozenset(self.owner(g2) for g1, g2, _ in self.contacts(q) if self._tool_geom(g1))
+
+    def path_collision(self, qs: np.ndarray, allow: Allowance = Allowance()) -> tuple[int, Collision] | None:
+        """The first collision along the joint path through the rows of ``qs`` (straight in joint
+        space between rows, checked every :data:`CHECK_STEP`): (row index before it, collision),
+        or None if the whole path is clear."""
+        qs = np.asarray(qs, float)
+        if len(qs) == 0:
+            return None
+        hit = self.collision(qs[0], allow)
+        if hit is not None:
+            return 0, hit
+        for i in range(len(qs) - 1):
+            a, b = qs[i], qs[i + 1]
+            n = max(1, int(np.ceil(np.max(np.abs(b - a)) / CHECK_STEP)))
+            for k in range(1, n + 1):
+                hit = self.collision(a + (k / n) * (b - a), allow)
+                if hit is not None:
+                    return i, hit
+        return None
+
+
+def _copy_model(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A private copy of ``model`` (its contact bits and margins are changed for checking)."""
+    import copy
+
+    return copy.deepcopy(model)
