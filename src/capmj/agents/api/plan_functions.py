@@ -27,6 +27,13 @@ from capmj.sim.pose import quat_euler_xyz, wxyz
 
 CORNER_NAMES = ("top left corner", "top right corner", "bottom left corner", "bottom right corner")
 SIDE_NAMES = ("top side", "right side", "bottom side", "left side")
+
+# The types the functions take (their JSON forms in agents/api/tool_schemas): a name or an obj_id,
+# a position [x, y] or [x, y, z], a pose (position, quaternion xyzw).
+Name = str | int
+Position = list[float]
+Pose = tuple[Position, list[float]]
+Place = Name | Position | Pose
 _CORNERS_UV = ((0.0, 1.0), (1.0, 1.0), (0.0, 0.0), (1.0, 0.0))
 _SIDES_UV = ((0.5, 1.0), (1.0, 0.5), (0.5, 0.0), (0.0, 0.5))
 
@@ -54,7 +61,7 @@ class PlanFunctions(CapRavensFunctions):
         """Names of every object in the scene (read from the live world)."""
         return self._api.object_names()
 
-    def get_obj_pos(self, obj):
+    def get_obj_pos(self, obj: Name | list[Name]) -> list[Any]:
         """[x, y, z] (m) of an object's centre; a list of names gives a list.
 
         The centre is the origin of the object's own frame: a block's or ball's geometric centre;
@@ -67,7 +74,7 @@ class PlanFunctions(CapRavensFunctions):
             return [self.get_obj_pos(o) for o in obj]
         return [Coordinate(v) for v in self._api.position(self._api.resolve(obj).obj_id)]
 
-    def get_obj_rot(self, obj):
+    def get_obj_rot(self, obj: Name | list[Name]) -> list[Any]:
         """Orientation quaternion (x, y, z, w) of an object; a list of names gives a list.
 
         Objects start at random yaws (about z); an upright object's yaw is 2 atan2(z, w)."""
@@ -75,7 +82,7 @@ class PlanFunctions(CapRavensFunctions):
             return [self.get_obj_rot(o) for o in obj]
         return [Coordinate(v) for v in self._api.quat_xyzw(self._api.resolve(obj).obj_id)]
 
-    def get_bbox(self, obj):
+    def get_bbox(self, obj: Name | list[Name]) -> tuple[float, ...]:
         """World axis-aligned box (xmin, ymin, zmin, xmax, ymax, zmax) (m), the thesis's box, not
         the sizes CapRavens' code returned (sizes are xmax − xmin, ...).  A list of names gives the
         box of its first object, as CapRavens' did: its examples pass a list of like blocks to ask
@@ -102,21 +109,21 @@ class PlanFunctions(CapRavensFunctions):
         return {o.name: ([float(v) for v in api.position(o.obj_id)], quat_euler_xyz(wxyz(api.quat_xyzw(o.obj_id))))
                 for o in api.objects()}
 
-    def get_obj_positions_np(self, names) -> np.ndarray:
+    def get_obj_positions_np(self, names: Name | list[Name]) -> np.ndarray:
         """(n, 3) array of object centres (m)."""
         names = [names] if isinstance(names, (str, int)) else list(names)
         return np.array([self.get_obj_pos(n) for n in names], float).reshape(-1, 3)
 
-    def get_obj_rotations_np(self, names) -> np.ndarray:
+    def get_obj_rotations_np(self, names: Name | list[Name]) -> np.ndarray:
         """(n, 4) array of object quaternions (x, y, z, w)."""
         names = [names] if isinstance(names, (str, int)) else list(names)
         return np.array([self.get_obj_rot(n) for n in names], float).reshape(-1, 4)
 
-    def get_color(self, obj) -> str:
+    def get_color(self, obj: Name) -> str:
         """The colour name of an object ("red", "blue", ...)."""
         return self._api.resolve(obj).color
 
-    def denormalize(self, pos):
+    def denormalize(self, pos: list[float] | list[list[float]]) -> list[Any]:
         """Normalised [u, v] (u left→right, v bottom→top, both in [0, 1]) → world [x, y]:
         x = 0.75 − 0.5 v, y = −0.5 + u.  A third value (z) is passed through; a list of
         points gives a list."""
@@ -128,19 +135,19 @@ class PlanFunctions(CapRavensFunctions):
         x, y = denormalize_uv(arr[0], arr[1])
         return [x, y] + ([float(arr[2])] if len(arr) == 3 else [])
 
-    def get_corner_name(self, pos) -> str:
+    def get_corner_name(self, pos: Place) -> str:
         """Name of the workspace corner nearest to a position ("top left corner", ...)."""
         p = self._api.xy(pos)
         corners = np.array([denormalize_uv(u, v) for u, v in _CORNERS_UV])
         return CORNER_NAMES[int(np.argmin(np.hypot(*(corners - p).T)))]
 
-    def get_side_name(self, pos) -> str:
+    def get_side_name(self, pos: Place) -> str:
         """Name of the workspace side nearest to a position ("top side", "right side", ...)."""
         p = self._api.xy(pos)
         sides = np.array([denormalize_uv(u, v) for u, v in _SIDES_UV])
         return SIDE_NAMES[int(np.argmin(np.hypot(*(sides - p).T)))]
 
-    def is_target_occupied(self, targ, r: float = 0.02) -> list[str]:
+    def is_target_occupied(self, targ: Place | list[Position | Pose], r: float = 0.02) -> list[str]:
         """Names of the objects occupying a target.
 
         ``targ`` a position ([x, y], [x, y, z] or (position, quaternion)): every object whose
@@ -151,7 +158,9 @@ class PlanFunctions(CapRavensFunctions):
         """
         return self._api.occupied(targ, float(r))
 
-    def get_random_free_pos(self, targ=None, area=None, r: float = FREE_CLEARANCE, search_area=None) -> list[float]:
+    def get_random_free_pos(self, targ: Place | list[Place] | None = None,
+                            area: tuple[float, float, float, float] | None = None, r: float = FREE_CLEARANCE,
+                            search_area: tuple[float, float, float, float] | None = None) -> list[float]:
         """A random free position [x, y, 0.0] (m) on the table.
 
         ``area`` = (xmin, ymin, xmax, ymax), default the reachable workspace; the returned
@@ -162,7 +171,7 @@ class PlanFunctions(CapRavensFunctions):
         """
         return self._api.free_position(targ, search_area if area is None else area, float(r))
 
-    def put_first_on_second(self, obj, target) -> None:
+    def put_first_on_second(self, obj: Name | Position, target: Place) -> None:
         """One pick-and-place of ``obj`` (a name; fixed objects cannot be picked).
 
         Objects start at random yaws; where the object goes and the yaw it ends with follow
@@ -183,7 +192,7 @@ class PlanFunctions(CapRavensFunctions):
         """
         self._api.put(obj, target)
 
-    def stack_objects_in_order(self, object_names, targ=None) -> None:
+    def stack_objects_in_order(self, object_names: list[Name] | Name, targ: Place | None = None) -> None:
         """Stack ``object_names`` bottom ([0]) to top; [0] goes on ``targ`` when given, otherwise
         it stays where it is.  Each next object goes on the previous one's top.  (The parameter
         keeps CapRavens' name, so ``stack_objects_in_order(object_names=...)`` runs as written.)"""
@@ -199,7 +208,7 @@ class PlanFunctions(CapRavensFunctions):
         for lower, upper in zip(names, names[1:]):
             put(upper, lower)
 
-    def say(self, msg) -> None:
+    def say(self, msg: str) -> None:
         """Record a message in the episode log.  The messages of one attempt hold at most
         ``Budget.max_said_chars`` characters together; one that would pass it is refused
         (:class:`~capmj.errors.TextBudgetExceeded`) before its text is made."""
