@@ -9,10 +9,11 @@ turns them into JSON data and back.  They sit below every layer (like :mod:`capm
 and the runner write them, the benchmark and replay read them.
 """
 
-from capmj.records.attempt import ATTEMPT_FIELDS, LOOP_RULES, ApiError, AttemptRecord
+from capmj.records.attempt import ATTEMPT_FIELDS, CALL_FORMS, LOOP_RULES, ApiError, AttemptRecord, ToolCallRecord
 from capmj.records.episode import SCHEMA, Drift, Episode, EpisodeRecord, EpisodeResult, Key
 from capmj.records.notes import LLMNotes, Spend, SpendLimits
 from capmj.records.perception import PerceptionCall, PerceptionNotes
 
-__all__ = ["ATTEMPT_FIELDS", "LOOP_RULES", "SCHEMA", "ApiError", "AttemptRecord", "Drift", "Episode", "EpisodeRecord",
-           "EpisodeResult", "Key", "LLMNotes", "PerceptionCall", "PerceptionNotes", "Spend", "SpendLimits"]
+__all__ = ["ATTEMPT_FIELDS", "CALL_FORMS", "LOOP_RULES", "SCHEMA", "ApiError", "AttemptRecord", "Drift", "Episode", "EpisodeRecord",
+           "EpisodeResult", "Key", "LLMNotes", "PerceptionCall", "PerceptionNotes", "Spend", "SpendLimits",
+           "ToolCallRecord"]

@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 
 from capmj.records.codec import from_plain, to_plain
 
-__all__ = ["ATTEMPT_FIELDS", "LOOP_RULES", "ApiError", "AttemptRecord"]
+__all__ = ["ATTEMPT_FIELDS", "CALL_FORMS", "LOOP_RULES", "ApiError", "AttemptRecord", "ToolCallRecord"]
 
 LOOP_RULES: dict[str, str] = {
     "achieved": "the reporter said achieved: stop",
@@ -33,6 +33,7 @@ LOOP_RULES: dict[str, str] = {
     "finish": "multi-turn: the model answered FINISH: stop (the scene as it is)",
     "next_turn": "multi-turn: no FINISH: the model gets the turn's feedback and answers again, no reset",
     "max_turns": "multi-turn: the last turn (--max-turns) ended without FINISH: stop",
+    "answered": "--policy tools: the model answered without a tool call: stop (the scene as it is)",
 }
 """What the loop decided after an attempt (``rule`` of an attempt record), by
 :func:`capmj.agents.llm_agent.loop_policy.decide`.  The loop also stops when the attempts are used up
@@ -79,6 +80,8 @@ ATTEMPT_FIELDS: dict[str, str] = {
                 "a turn's report stays empty)",
     "images": "multi-turn only: camera images sent with that feedback (0 with --feedback text)",
     "described": "multi-turn --feedback describe only: the describing model's account of what changed",
+    "tool_calls": "--policy tools only: the turn's function calls in order, each with its arguments, its form "
+                  "(CALL_FORMS), its JSON result or its error; absent in code-policy records",
 }
 """The keys of every attempt record in ``llm.attempts`` and their meaning."""
 
@@ -95,6 +98,36 @@ class ApiError:
 
     @classmethod
     def from_dict(cls, data: Any, *, strict: bool = True) -> "ApiError":
+        return from_plain(cls, data, strict=strict)
+
+
+CALL_FORMS: dict[str, str] = {
+    "tool_calls": "the answer's tool_calls, as the OpenAI API defines them",
+    "content_json": "a JSON object {\"name\", \"arguments\"} written in the answer's text instead (small models do)",
+}
+"""How a model wrote a function call (``form`` of a :class:`ToolCallRecord`)."""
+
+
+@dataclass(frozen=True)
+class ToolCallRecord:
+    """One function call of a ``--policy tools`` turn: ``arguments`` as the model wrote them (JSON
+    text), ``form`` a key of :data:`CALL_FORMS`, and what went back to the model: ``result`` (the
+    value as JSON) or ``error``."""
+
+    id: str
+    name: str
+    arguments: str
+    form: str
+    result: str | None = None
+    error: str | None = None
+
+    OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"result", "error"})
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_plain(self)
+
+    @classmethod
+    def from_dict(cls, data: Any, *, strict: bool = True) -> "ToolCallRecord":
         return from_plain(cls, data, strict=strict)
 
 
@@ -141,10 +174,11 @@ class AttemptRecord:
     feedback: str | None = None
     images: int | None = None
     described: str | None = None
+    tool_calls: tuple[ToolCallRecord, ...] | None = None
 
     OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"error_kind", "error_type", "error_status",
                                                          "failed_program", "api_error", "reporter_error",
-                                                         "finish", "feedback", "images", "described"})
+                                                         "finish", "feedback", "images", "described", "tool_calls"})
     """Keys present only with an error (or, ``reporter_error``, a reporter's own error), as written
     before records were typed; and the turn keys of a multi-turn episode (issue #47), absent from
     single-turn records, so those are written and read exactly as before."""

@@ -15,11 +15,16 @@ from typing import Any, ClassVar
 from capmj.records.attempt import AttemptRecord
 from capmj.records.codec import from_plain, to_plain
 
-__all__ = ["LLMNotes", "Spend", "SpendLimits", "TURNS_USED_UP"]
+__all__ = ["ANSWERED", "LLMNotes", "Spend", "SpendLimits", "TURNS_USED_UP"]
 
 TURNS_USED_UP = "turns used up"
 """``LLMNotes.stopped`` of a multi-turn episode that reached its ``max_turns`` without the model's
-FINISH (failure label ``no_finish``, :mod:`capmj.bench.failures`)."""
+FINISH (failure label ``no_finish``, :mod:`capmj.bench.failures`); under ``--policy tools``, one whose
+model called functions in every turn."""
+
+ANSWERED = "model: no tool call"
+"""``LLMNotes.stopped`` of a ``--policy tools`` episode whose model answered without a function call
+(without saying FINISH): its claim that it is done."""
 
 
 @dataclass(frozen=True)
@@ -90,10 +95,14 @@ class LLMNotes:
     """Multi-turn: the turn limit."""
     finish_agreed: bool | None = None
     """Multi-turn: whether the task predicate held when the model said FINISH (its self-assessment,
-    like a reporter's verdict); None when it never said FINISH."""
+    like a reporter's verdict); None when it never said FINISH.  Under ``--policy tools`` an answer
+    without a function call is such a claim too."""
+    policy: str | None = None
+    """``tools`` when the model called the API as functions (each attempt record is a turn); None
+    (absent): code."""
 
     OMIT_IF_NONE: ClassVar[frozenset[str]] = frozenset({"stopped", "spend", "interaction", "feedback", "max_turns",
-                                                         "finish_agreed"})
+                                                         "finish_agreed", "policy"})
     """Keys absent until the loop stops / the episode's spend is summed up (an agent that raised
     before that); the multi-turn keys (issue #47) absent from single-turn records, which stay as
     they were written before."""
