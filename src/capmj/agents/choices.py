@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-__all__ = ["FEEDBACKS", "INTERACTIONS", "LOOP_POLICIES", "ON_UNKNOWN", "REPORTERS", "REPORTER_PROMPTS", "REPORTER_TABLE", "ReporterEntry",
+__all__ = ["FEEDBACKS", "INTERACTIONS", "LOOP_POLICIES", "ON_UNKNOWN", "POLICIES", "REPORTERS", "REPORTER_PROMPTS", "REPORTER_TABLE", "ReporterEntry",
            "reporter_prompt_help"]
 
 
@@ -56,6 +56,10 @@ LOOP_POLICIES = ("thesis", "careful")
 INTERACTIONS = ("single", "multi")
 """``--interaction``: ``single`` (default: one whole plan per attempt, the thesis's loop) or ``multi``
 (turns of code with execution feedback until the model says FINISH: :mod:`capmj.agents.llm_agent.multiturn`)."""
+
+POLICIES = ("code", "tools")
+"""``--policy``: ``code`` (default: the model writes Python that calls the planner API) or ``tools`` (the
+model calls the API's functions as OpenAI tools, turn by turn: :mod:`capmj.agents.llm_agent.tools`)."""
 
 FEEDBACKS = ("text", "image", "describe")
 """``--feedback`` of ``--interaction multi``: what the model is shown after a turn (``text``, the default:

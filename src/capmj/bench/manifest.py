@@ -5,7 +5,8 @@ package that shapes results, sha256 of every prompt file and every task plugin m
 model string and the API base *host* (never a key, never the full URL's credentials), what the
 planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.api.perceived`), the
 sandbox, simulation and LLM budgets, ``PYTHONHASHSEED``, and for ``--interaction multi`` the
-``interaction`` (its feedback, turn limit and describing model; absent from single-turn manifests).  :func:`differences` lists the
+``interaction`` (its feedback, turn limit and describing model; absent from single-turn manifests), and
+for ``--policy tools`` the ``policy`` (with its turn limit; absent under code).  :func:`differences` lists the
 manifest entries in which combined runs disagree, for ``report`` to warn about.
 """
 
@@ -34,7 +35,7 @@ __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "packa
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
 MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "perception", "budgets",
-                 "hash_seed", "interaction")
+                 "hash_seed", "interaction", "policy")
 """Entries compared between runs (everything but timestamps, price and cache location)."""
 
 
@@ -136,6 +137,7 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "cache_dir": str(cfg.cache_dir) if cfg is not None and cfg.cache_dir is not None else None,
         "hash_seed": os.environ.get("PYTHONHASHSEED"),
         **_interaction(agent),
+        **_policy(agent),
     }
 
 
@@ -147,6 +149,14 @@ def _interaction(agent: Any) -> dict[str, Any]:
     return {"interaction": {"mode": "multi", "feedback": agent_setting(agent, "feedback"),
                             "max_turns": agent_setting(agent, "max_turns"),
                             "describe_model": agent_setting(agent, "describe_model")}}
+
+
+def _policy(agent: Any) -> dict[str, Any]:
+    """``policy`` of an LLM agent calling the API as tools (``{"policy": {"mode": "tools", "max_turns"}}``);
+    nothing for the code policy and every other agent, so their manifests stay as they were."""
+    if agent_setting(agent, "policy") != "tools":
+        return {}
+    return {"policy": {"mode": "tools", "max_turns": agent_setting(agent, "max_turns")}}
 
 
 def _flat(prefix: str, v: Any, out: dict[str, Any]) -> None:

@@ -16,7 +16,8 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from capmj.agents.choices import FEEDBACKS, INTERACTIONS, LOOP_POLICIES, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS, reporter_prompt_help
+from capmj.agents.choices import (FEEDBACKS, INTERACTIONS, LOOP_POLICIES, ON_UNKNOWN, POLICIES, REPORTER_PROMPTS, REPORTERS,
+                                  reporter_prompt_help)
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.errors import ConfigError
 from capmj.llm.options import LLM_OPTIONS, add_llm_options, llm_values
@@ -92,10 +93,13 @@ AGENT_FLAGS: tuple[Flag, ...] = (
     Flag(("--feedback",), "feedback", "what --interaction multi shows after a turn: text (default: output, error, API "
          "calls, objects), image (also the cameras' RGB views) or describe (also a model's account of what changed)",
          choices=FEEDBACKS),
-    Flag(("--max-turns",), "max_turns", "turns of --interaction multi (default: 8); a model that never says FINISH "
+    Flag(("--max-turns",), "max_turns", "turns of --interaction multi or --policy tools (default: 8); a model that never says FINISH "
          "ends there (failure 'no_finish')", int, "N"),
     Flag(("--describe-model",), "describe_model", "the model of --feedback describe (default: --model)",
          metavar="MODEL"),
+    Flag(("--policy",), "policy", "code (default: the model writes Python calling the planner API) or tools (it "
+         "calls the API's functions as tools, turn by turn, until it answers without a call or FINISH; with "
+         "--interaction single or multi; docs/llm.md)", choices=POLICIES),
     Flag(("--price",), "price", "declare the model's price in USD per million input,output tokens (local/unlisted "
          "models)", metavar="IN,OUT"),
 )
@@ -107,7 +111,7 @@ AGENT_OPTIONS: tuple[str, ...] = (tuple(o.field for o in LLM_OPTIONS) + tuple(f.
 ``LLMConfig`` field names); ``perception`` is also the reference agent's."""
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
-                 "perception", "loop_policy", "reporter_prompt", "interaction", "feedback", "max_turns")
+                 "perception", "loop_policy", "reporter_prompt", "interaction", "feedback", "max_turns", "policy")
 """Agent options that tell configurations apart in report column labels (besides agent and model)."""
 
 

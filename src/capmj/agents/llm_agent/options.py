@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from capmj.agents.choices import FEEDBACKS, INTERACTIONS, ON_UNKNOWN, REPORTER_PROMPTS, REPORTERS
+from capmj.agents.choices import FEEDBACKS, INTERACTIONS, ON_UNKNOWN, POLICIES, REPORTER_PROMPTS, REPORTERS
 from capmj.agents.lmp.meter import Price, check_limit, parse_price
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.agents.llm_agent.loop_policy import check_policy
@@ -44,7 +44,7 @@ DEFAULT_LMP_BUDGET = SandboxBudget(wall_s=30.0, max_api_calls=1000)
 """Budget of one helper LMP's code (parse_obj_name, parse_position, parse_completion)."""
 
 DEFAULT_MAX_TURNS = 8
-"""Turns of ``--interaction multi`` when ``max_turns`` is not given."""
+"""Turns of ``--interaction multi`` or ``--policy tools`` when ``max_turns`` is not given."""
 
 DEFAULT_MODEL = "gpt-4o-mini"
 """The model of an LLM agent built from options that name none."""
@@ -105,6 +105,10 @@ class LLMAgentOptions:
     """``multi`` only: turns before the episode ends without the model's FINISH (None: :data:`DEFAULT_MAX_TURNS`)."""
     describe_model: str | None = None
     """``multi`` with ``feedback="describe"`` only: the model that describes what changed (None: the planner's)."""
+    policy: str = "code"
+    """:data:`capmj.agents.choices.POLICIES`: ``code`` (the model writes code) or ``tools`` (it calls the API's
+    functions as tools, in turns bounded by ``max_turns``: :mod:`capmj.agents.llm_agent.tools`); ``tools``
+    takes no reporter and one attempt, with ``single`` or ``multi``."""
 
     def __post_init__(self) -> None:
         def set_(name: str, value: Any) -> None:
@@ -142,14 +146,24 @@ class LLMAgentOptions:
         ``max_turns`` to their defaults, so its records always state them."""
         if self.interaction not in INTERACTIONS:
             raise ConfigError(f"unknown interaction {self.interaction!r}; valid: {', '.join(INTERACTIONS)}")
+        if self.policy not in POLICIES:
+            raise ConfigError(f"unknown policy {self.policy!r}; valid: {', '.join(POLICIES)}")
+        tools = self.policy == "tools"
         if self.interaction == "single":
-            given = [n for n in ("feedback", "max_turns", "describe_model") if getattr(self, n) is not None]
+            given = [n for n in ("feedback", "max_turns", "describe_model") if getattr(self, n) is not None
+                     and not (tools and n == "max_turns")]
             if given:
                 raise ConfigError(f"{', '.join(given)} need(s) --interaction multi")
-            return
+            if not tools:
+                return
         if self.reporter != "none" or self.attempts != 1:
-            raise ConfigError("--interaction multi takes no --reporter and no --attempts: the model's FINISH ends "
+            form = "--policy tools" if tools else "--interaction multi"
+            raise ConfigError(f"{form} takes no --reporter and no --attempts: the model's FINISH ends "
                               "the episode, --max-turns bounds it")
+        if self.interaction == "single":
+            turns = DEFAULT_MAX_TURNS if self.max_turns is None else self.max_turns
+            set_("max_turns", _at_least("max_turns", turns, int, "an integer", 1))
+            return
         feedback = "text" if self.feedback is None else self.feedback
         if feedback not in FEEDBACKS:
             raise ConfigError(f"unknown feedback {feedback!r}; valid: {', '.join(FEEDBACKS)}")
