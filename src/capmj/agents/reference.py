@@ -9,7 +9,9 @@ tasks and the physics together: a failing reference episode is a bug in one of t
 
 Plans are looked up, in order: a ``reference_plan`` string attribute of the task object (plugins
 can ship their own), ``$CAPMJ_PROMPTS_DIR/reference/<task-name>.py``, then
-``reference/<task-name>.py`` in the packaged ``prompts/`` folder.
+``reference/<task-name>.py`` in the packaged ``prompts/`` folder.  At the low API level
+(``api="low"``, :mod:`capmj.agents.api.low_level`) the plans are ``reference/low/<task-name>.py``
+(a task's ``reference_plan_low`` attribute first), written against that API alone.
 """
 
 from __future__ import annotations
@@ -17,10 +19,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from capmj.agents.api.low_level import LEVELS
 from capmj.agents.api.perceived import make_api
 from capmj.agents.base import EpisodeContext
 from capmj.agents.sandbox import SandboxBudget, run_code
-from capmj.errors import AgentError
+from capmj.errors import AgentError, ConfigError
 from capmj.resources import PROMPTS_ENV, packaged
 
 
@@ -39,20 +42,25 @@ def prompts_dirs() -> list[Path]:
     return dirs
 
 
-def reference_plan(task) -> tuple[str, str]:
-    """``(code, source)`` of the reference plan of a task; raises AgentError when there is none."""
-    own = getattr(task, "reference_plan", None)
+def reference_plan(task, api: str = "high") -> tuple[str, str]:
+    """``(code, source)`` of the reference plan of a task at an API level (``high`` or ``low``);
+    raises AgentError when there is none."""
+    if api not in LEVELS:
+        raise ConfigError(f"unknown API level {api!r}; valid levels: {', '.join(LEVELS)}")
+    attr = "reference_plan" if api == "high" else f"reference_plan_{api}"
+    own = getattr(task, attr, None)
     if isinstance(own, str) and own.strip():
-        return own, f"<{task.name}.reference_plan>"
+        return own, f"<{task.name}.{attr}>"
     name = getattr(task, "name", str(task))
+    folder = Path("reference") if api == "high" else Path("reference") / api
     tried = []
     for d in prompts_dirs():
-        path = d / "reference" / f"{name}.py"
+        path = d / folder / f"{name}.py"
         tried.append(str(path))
         if path.is_file():
             return path.read_text(encoding="utf-8"), str(path)
     raise AgentError(f"no reference plan for task {name!r}; looked for {', '.join(tried)} "
-                     "and a 'reference_plan' attribute on the task")
+                     f"and a {attr!r} attribute on the task")
 
 
 class ReferenceAgent:
@@ -61,15 +69,19 @@ class ReferenceAgent:
     name = "reference"
     model = None
 
-    def __init__(self, budget: SandboxBudget | None = None, perception: str = "state") -> None:
+    def __init__(self, budget: SandboxBudget | None = None, perception: str = "state", api: str = "high") -> None:
+        if api not in LEVELS:
+            raise ConfigError(f"unknown API level {api!r}; valid levels: {', '.join(LEVELS)}")
         self.budget = budget or REFERENCE_BUDGET
         self.perception = perception
         """``state`` (the API reads the simulator) or ``rgbd`` (the cameras: :mod:`capmj.agents.api.perceived`)."""
+        self.api = api
+        """The planner API level its plans are written against: ``high`` or ``low`` (:data:`~capmj.agents.api.low_level.LEVELS`)."""
 
     def act(self, ctx: EpisodeContext) -> None:
-        code, source = reference_plan(ctx.task)
+        code, source = reference_plan(ctx.task, self.api)
         api = make_api(ctx, self.perception)
-        env: dict[str, object] = dict(api.functions())
+        env: dict[str, object] = dict(api.functions(self.api))
         env["goal"] = ctx.scene.goal
         env["objects"] = api.object_names()
         ctx.recorder.text("reference/plan", f"# {source}\n{api.objects_text()}\n# {ctx.scene.goal}\n{code}")

@@ -38,13 +38,14 @@ import numpy as np
 
 from capmj.agents.api.footprints import Footprints
 from capmj.agents.api.names import lookup
+from capmj.agents.api.low_level import LEVELS, LOW_LEVEL_FUNCTIONS, LowLevelFunctions
 from capmj.agents.api.plan_functions import API_FUNCTIONS, PlanFunctions
 from capmj.agents.api.values import ONE_ELEMENT_LISTS, Coordinate
 from capmj.agents.api.values import is_pose as _is_pose
 from capmj.agents.api.values import is_vector as _is_vector
 from capmj.agents.api.values import summary as _summary
 from capmj.agents.base import EpisodeContext
-from capmj.errors import MotionFailed, PortingDifference, describe
+from capmj.errors import ConfigError, MotionFailed, PortingDifference, describe
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.objects import ObjectSpec
 from capmj.sim.pose import quat_yaw, wxyz
@@ -149,9 +150,16 @@ class PlannerAPI:
         return f"objects = {self.object_names()!r}"
 
     # ================================================================== the API
-    def functions(self) -> dict[str, Callable[..., Any]]:
+    def functions(self, level: str = "high") -> dict[str, Callable[..., Any]]:
         """Plain functions for plan code, by name (each call logged in :attr:`call_log`): the
-        methods of a :class:`PlanFunctions` over this API named in :data:`API_FUNCTIONS`."""
+        methods of a :class:`PlanFunctions` over this API named in :data:`API_FUNCTIONS`, or at
+        ``level="low"`` those of a :class:`~capmj.agents.api.low_level.LowLevelFunctions` named in
+        :data:`~capmj.agents.api.low_level.LOW_LEVEL_FUNCTIONS` (``--api low``)."""
+        if level == "low":
+            low = LowLevelFunctions(self)
+            return {name: self._logged(name, getattr(low, name)) for name in LOW_LEVEL_FUNCTIONS}
+        if level != "high":
+            raise ConfigError(f"unknown API level {level!r}; valid levels: {', '.join(LEVELS)}")
         fns = PlanFunctions(self)
         logged = {name: self._logged(name, getattr(fns, name)) for name in API_FUNCTIONS}
         fns.use_logged(logged)

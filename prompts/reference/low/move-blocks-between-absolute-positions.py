@@ -1,0 +1,116 @@
+# Goal: "Move all the blocks in the {area} area to the {area} area": each block of the source
+# area to a free spot of the target area (halves: top x < 0.5, bottom x > 0.5, left y < 0, right y > 0).
+# Written against the low-level API only (--api low): no pick-and-place; the helpers below
+# compose one from guarded moves and the suction.
+
+# --- helpers of this plan, on the low-level API only -------------------------------------------
+# The suction tool points down; a tool pose is [x, y, z] of the tip and a yaw.  pick() takes an
+# object from above with a guarded descent; place() carries it over a point, turns it, lowers it
+# until it touches what is below and lets go.  Blocks look the same every quarter turn.
+
+
+def info(name):
+    return get_object(name)
+
+
+def quarter(angle):
+    # the angle reduced to [-pi/4, pi/4): a block turned by a quarter turn looks the same
+    return (angle + math.pi / 4) % (math.pi / 2) - math.pi / 4
+
+
+def pick(name):
+    o = info(name)
+    x, y, _ = o['position']
+    top = o['bbox'][5]
+    _, tool_yaw = get_ee_pose()
+    yaw = quarter(tool_yaw)  # the cup is round: keep the wrist near the middle of its range
+    move_to_pose([x, y, top + 0.03], yaw)
+    move_until_contact([x, y, top - 0.02], yaw)
+    if not suction_on():
+        raise RuntimeError(f'the suction did not grip {name}')
+    return yaw
+
+
+def surface_under(x, y, reach, skip):
+    # the highest top of an object whose box reaches within `reach` of (x, y), 0 for the table
+    tops = [0.0]
+    for o in get_objects():
+        b = o['bbox']
+        if o['name'] != skip and b[0] - reach <= x <= b[3] + reach and b[1] - reach <= y <= b[4] + reach:
+            tops.append(b[5])
+    return max(tops)
+
+
+def place(name, x, y, yaw=None):
+    # the held object `name` centred over (x, y), turned to `yaw` (None: as it is), lowered onto what is there
+    o = info(name)
+    tip, tool_yaw = get_ee_pose()
+    turn = 0.0 if yaw is None else quarter(yaw - o['yaw'])
+    dx, dy = o['position'][0] - tip[0], o['position'][1] - tip[1]  # the object's centre from the tip
+    c, s = math.cos(turn), math.sin(turn)
+    tx, ty = x - (c * dx - s * dy), y - (s * dx + c * dy)
+    hang = tip[2] - o['bbox'][2]  # from the tip down to the object's bottom
+    surface = surface_under(x, y, max(o['half_size'][0], o['half_size'][1]), name)
+    move_to_pose([tx, ty, surface + hang + 0.03], tool_yaw + turn)
+    move_until_contact([tx, ty, hang - 0.04], tool_yaw + turn)
+    suction_off()
+
+
+def put(name, x, y, yaw=None):
+    pick(name)
+    place(name, x, y, yaw)
+
+
+def put_on(name, target):
+    # on a block or a zone: centred, turned like it; into a bowl (or onto anything else): centred, as it is
+    t = info(target)
+    pick(name)
+    place(name, t['position'][0], t['position'][1], t['yaw'] if t['kind'] in ('block', 'zone') else None)
+
+
+def free_spot(area, r=0.045, taken=()):
+    # a point of area (xmin, ymin, xmax, ymax), r from its border, at least r from every object's box
+    # and 2 r from the points in `taken`; the free one nearest the area's centre
+    xmin, ymin, xmax, ymax = area
+    boxes = [o['bbox'] for o in get_objects()]
+    cx, cy = (xmin + xmax) / 2, (ymin + ymax) / 2
+    best = None
+    for i in range(15):
+        for j in range(15):
+            x = xmin + r + (xmax - xmin - 2 * r) * i / 14
+            y = ymin + r + (ymax - ymin - 2 * r) * j / 14
+            gaps = [math.hypot(max(b[0] - x, 0.0, x - b[3]), max(b[1] - y, 0.0, y - b[4])) for b in boxes]
+            if min(gaps + [1.0]) < r or any(math.hypot(x - p[0], y - p[1]) < 2 * r for p in taken):
+                continue
+            d = math.hypot(x - cx, y - cy)
+            if best is None or d < best[0]:
+                best = (d, [x, y])
+    if best is None:
+        raise RuntimeError(f'no free spot in {area}')
+    return best[1]
+
+
+# --- the plan ----------------------------------------------------------------------------------
+X_RANGE = {'top': (0.25, 0.5), 'bottom': (0.5, 0.75)}
+Y_RANGE = {'left': (-0.5, 0.0), 'right': (0.0, 0.5)}
+
+
+def area_bounds(area):
+    # (xmin, ymin, xmax, ymax) of an area name such as "top left"
+    vertical, horizontal = area.split()
+    (xmin, xmax), (ymin, ymax) = X_RANGE[vertical], Y_RANGE[horizontal]
+    return (xmin, ymin, xmax, ymax)
+
+
+def inside(pos, bounds):
+    return bounds[0] < pos[0] < bounds[2] and bounds[1] < pos[1] < bounds[3]
+
+
+text = goal.rstrip('.')
+source_area = text.split(' in the ')[1].split(' area')[0]
+target_area = text.split(' to the ')[1].split(' area')[0]
+source, target = area_bounds(source_area), area_bounds(target_area)
+to_move = [name for name in objects if ' block ' in name and inside(info(name)['position'], source)]
+for block in to_move:
+    x, y = free_spot(target)
+    put(block, x, y, 0.0)
