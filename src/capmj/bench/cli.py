@@ -39,6 +39,7 @@ examples:
   python -m capmj.bench --agent llm --model gpt-4o-mini --reporter vlm --log-images   (see docs/llm.md)
   python -m capmj.bench --list                            # tasks, their plugins, tags, broken plugins
   python -m capmj.bench report runs/oracle runs/llm       # side-by-side success table, paired McNemar test
+  python -m capmj.bench report runs/oracle runs/llm --html cmp.html   # the same as one page (docs/bench.md)
   python -m capmj.bench replay-check runs/llm             # re-run from the LLM cache alone, compare
   python -m capmj.bench judge --reporter text --model M --out runs/judge   # score a reporter on labelled states
   python -m capmj.bench export runs/llm --format chat-jsonl --out calls.jsonl   (see docs/export.md)
@@ -125,6 +126,9 @@ def build_report_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="write summary.json/md/png here (default: into DIR when there is one DIR, else print only)")
     p.add_argument("--json", action="store_true", help="print summary JSON instead of Markdown")
+    p.add_argument("--html", nargs="?", const="", default=None, type=str, metavar="OUT.html",
+                   help="also write one self-contained page (heat map, bars, efficiency, anomalies, failure "
+                        "gallery; opens from disk), to OUT.html or report.html in the output folder (or here)")
     return p
 
 
@@ -173,6 +177,15 @@ def report_main(argv: Sequence[str]) -> int:
         print(f"capmj-bench report: warning: {warning}", file=sys.stderr)
     if out is not None:
         print(f"wrote {Path(out) / 'summary.md'}, summary.json, summary.png", file=sys.stderr)
+    if args.html is not None:
+        from capmj.bench.page import REPORT_HTML, write_page
+
+        page = Path(args.html) if args.html else Path(out if out is not None else ".") / REPORT_HTML
+        try:
+            print(f"wrote {write_page(page, summary, args.dirs)}", file=sys.stderr)
+        except OSError as exc:
+            print(f"capmj-bench report: error: cannot write {page}: {one_line(str(exc))}", file=sys.stderr)
+            return 2
     return 0
 
 
