@@ -175,7 +175,7 @@ class MotionFailed(AgentError, RuntimeError):
     (``unreachable``, ``no_grip``; ``wrong_object`` when it picked another object than asked).
     A ``RuntimeError`` too, as plan code written against the original API catches it."""
 
-    shown_as = "RuntimeError"
+    shown_as: ClassVar[str | None] = "RuntimeError"
 
     def __init__(self, message: str, *, status: str) -> None:
         super().__init__(message)
