@@ -35,6 +35,11 @@ class ConfigError(CapmjError, ValueError):
     """Bad user input: unknown name, malformed range, unwritable folder.  Names the valid choices."""
 
 
+class ModelUnreachable(ConfigError):
+    """The model a run names cannot be asked: its server did not answer the start-up probe, refused
+    the key, or the provider refused the request (``capmj.bench.probe``).  The run does not start."""
+
+
 class RecordError(CapmjError, ValueError):
     """A stored record (a line of ``episodes.jsonl``, an attempt) does not match its schema: an
     unknown or missing key, or a value of the wrong type.  Names the record type and the key."""
