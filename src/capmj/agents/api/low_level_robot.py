@@ -78,11 +78,13 @@ def _owners(world: World) -> list[int]:
 class ContactWatch:
     """New contacts of the robot and its load during one move (see the module docstring)."""
 
-    def __init__(self, world: World, owners: list[int]) -> None:
+    def __init__(self, world: World, owners: list[int], released: int | None = None) -> None:
         self._world = world
         self._owner = owners
         self._held = world.suction.held
         self._start = self._pairs()
+        if released is not None:  # the cup leaving what it has just let go touches it on the way
+            self._start.add((_CUP, released))
         self.hit: tuple[int, int] | None = None
         """The first new contact, as (robot side: ``_CUP``, ``_LINK`` or the held obj_id; the other
         side's owner code)."""
@@ -141,6 +143,8 @@ class RobotDriver:
         self._owners = _owners(api.ctx.world)
         self._gripped: tuple[int, np.ndarray, np.ndarray] | None = None
         """Perceived mode: (the perceived object gripped, its centre then, the tip then)."""
+        self._released: int | None = None
+        """The object the suction let go of last, until the next move (the cup may touch it as it leaves)."""
 
     # ------------------------------------------------------------------ reading
     @property
@@ -285,7 +289,8 @@ class RobotDriver:
         ctx.check_budget(ctx.budget.max_primitives * MOVES_PER_PRIMITIVE, "low-level moves")
         w = self.world
         start, steps0, t0 = w.tip_pose()[0], w.steps, w.time
-        watch = ContactWatch(w, self._owners)
+        watch = ContactWatch(w, self._owners, self._released)
+        self._released = None
         status = run(watch)
         touched = status == "stopped" and (guarded and watch.tool_contact())
         collided = status == "stopped" and not touched
@@ -330,6 +335,7 @@ class RobotDriver:
         """Switch the suction off: what it held is let go and the scene perceived again (rgbd)."""
         w = self.world
         was = w.suction.release()
+        self._released = was
         w.step(self.motion.cfg.release_dwell_steps)
         scene = self._perceiving()
         if scene is not None and was is not None:
