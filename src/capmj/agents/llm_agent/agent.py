@@ -15,7 +15,8 @@ Per episode (``act``), under the default ``loop_policy="thesis"``::
              or the verdict is unknown and on_unknown == "stop"
 
 ``interaction="multi"`` runs turns of code with execution feedback instead of this loop
-(:mod:`capmj.agents.llm_agent.multiturn`); the default ``single`` is this loop.
+(:mod:`capmj.agents.llm_agent.multiturn`); the default ``single`` is this loop.  ``policy="tools"``
+runs turns of function calls instead (:mod:`capmj.agents.llm_agent.tools`), with either interaction.
 
 ``loop_policy="careful"`` judges a plan that raised after acting, re-plans from the current state
 when the verdict names only some objects wrong, and stops on a low-confidence verdict; the rules
@@ -51,6 +52,7 @@ from capmj.agents.llm_agent.loop_policy import Decision, Outcome, decide, judges
 from capmj.agents.api.perceived import make_api
 from capmj.agents.report.plan_check import plan_check
 from capmj.agents.llm_agent.multiturn import run_turns
+from capmj.agents.llm_agent.tools import check_tool_calling, run_tool_turns
 from capmj.agents.llm_agent.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.report.registry import Reporter, make_reporter
 from capmj.agents.report.verdict import Report
@@ -87,6 +89,8 @@ class LLMAgent:
         # a cost cap needs the price of *this* model (declared or in litellm's list)
         check_limits(config.model, max_tokens=o.episode_max_tokens, max_cost_usd=o.episode_max_cost_usd,
                      price=o.price)
+        if o.policy == "tools":  # a model without tool calling fails here, before any episode
+            check_tool_calling(config.model)
         self.transcript: list[LMPCall] = []
         self.client: LLMClient | None = None
 
@@ -105,6 +109,9 @@ class LLMAgent:
 
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
+        if self.options.policy == "tools":  # function calls in turns: its own module
+            run_tool_turns(self, ctx)
+            return
         if self.options.interaction == "multi":  # turns of code with feedback: its own module
             run_turns(self, ctx, check=plan_check)
             return
