@@ -32,11 +32,14 @@ from capmj.errors import ConfigError
 from capmj.resources import prompts_dir
 
 __all__ = [
+    "EXAMPLES",
     "META",
+    "PLANNER_PROMPTS",
     "QUESTION",
     "Example",
     "PromptFile",
     "load_prompt",
+    "planner_prompt",
     "load_system_prompt",
     "object_names",
     "prompts_dir",
@@ -47,6 +50,12 @@ QUESTION = "<<QUESTION>>"
 
 META = "#@"
 """Prefix of metadata lines in prompt files (stripped before sending)."""
+
+PLANNER_PROMPTS: dict[str, str] = {"high": "planner", "low": "planner_low"}
+"""The planner prompt file of each planner API level (``--api``)."""
+
+EXAMPLES: tuple[str, ...] = ("full", "none")
+"""``--examples``: the planner prompt with its few-shot examples, or without any (CaP-X's S4)."""
 
 
 @dataclass(frozen=True)
@@ -88,6 +97,11 @@ class PromptFile:
     def render(self, question: str) -> str:
         return self.template.replace(QUESTION, question.rstrip("\n"))
 
+    def without_examples(self) -> "PromptFile":
+        """The same prompt with every few-shot example left out (and no examples to run): what
+        precedes, separates and follows them is unchanged."""
+        return _parse_prompt(self.name, self.path, self.raw, keep_examples=False)
+
     @property
     def stop(self) -> tuple[str, ...]:
         """The stop sequences of this LMP (``#@ stop: [...]``, JSON): where the prompt's *next*
@@ -104,7 +118,7 @@ class PromptFile:
         return tuple(value)
 
 
-def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
+def _parse_prompt(name: str, path: Path, raw: str, keep_examples: bool = True) -> PromptFile:
     kept: list[str] = []
     examples: list[Example] = []
     meta: dict[str, str] = {}
@@ -129,9 +143,11 @@ def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
             else:
                 meta[key] = value
             continue
-        kept.append(line)
         if current is not None:
             current["lines"].append(line)
+            if not keep_examples:
+                continue
+        kept.append(line)
     if current is not None:
         raise ConfigError(f"{path}: example {current['id']!r} has no '#@ end'")
     template = re.sub(r"\n{3,}", "\n\n", "\n".join(kept)).strip("\n") + "\n"
@@ -140,7 +156,7 @@ def _parse_prompt(name: str, path: Path, raw: str) -> PromptFile:
     ids = [e.id for e in examples]
     if len(set(ids)) != len(ids):
         raise ConfigError(f"{path}: duplicate example ids in {ids}")
-    return PromptFile(name, path, raw, template, tuple(examples), meta)
+    return PromptFile(name, path, raw, template, tuple(examples) if keep_examples else (), meta)
 
 
 @lru_cache(maxsize=64)
@@ -159,6 +175,17 @@ def load_prompt(name: str, directory: Path | str | None = None) -> PromptFile:
         raise ConfigError(f"prompt file {path} not found (set CAPMJ_PROMPTS_DIR to the prompts "
                           "folder of a capmj checkout)") from None
     return _load_cached(str(path), stat.st_mtime_ns)
+
+
+def planner_prompt(api: str = "high", examples: str = "full", directory: Path | str | None = None) -> PromptFile:
+    """The planner prompt of an API level (:data:`PLANNER_PROMPTS`), with its examples or without
+    (:data:`EXAMPLES`); an unknown level or choice is a ConfigError naming the valid ones."""
+    if api not in PLANNER_PROMPTS:
+        raise ConfigError(f"unknown API level {api!r}; valid levels: {', '.join(PLANNER_PROMPTS)}")
+    if examples not in EXAMPLES:
+        raise ConfigError(f"unknown examples choice {examples!r}; valid: {', '.join(EXAMPLES)}")
+    prompt = load_prompt(PLANNER_PROMPTS[api], directory)
+    return prompt if examples == "full" else prompt.without_examples()
 
 
 def load_system_prompt(directory: Path | str | None = None, name: str = "system.txt") -> str:

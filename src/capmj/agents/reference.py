@@ -22,6 +22,7 @@ from pathlib import Path
 from capmj.agents.api.low_level import LEVELS
 from capmj.agents.api.perceived import make_api
 from capmj.agents.base import EpisodeContext
+from capmj.agents.prompt_files import EXAMPLES
 from capmj.agents.sandbox import SandboxBudget, run_code
 from capmj.errors import AgentError, ConfigError
 from capmj.resources import PROMPTS_ENV, packaged
@@ -69,14 +70,20 @@ class ReferenceAgent:
     name = "reference"
     model = None
 
-    def __init__(self, budget: SandboxBudget | None = None, perception: str = "state", api: str = "high") -> None:
+    def __init__(self, budget: SandboxBudget | None = None, perception: str = "state", api: str = "high",
+                 examples: str = "full") -> None:
         if api not in LEVELS:
             raise ConfigError(f"unknown API level {api!r}; valid levels: {', '.join(LEVELS)}")
+        if examples not in EXAMPLES:
+            raise ConfigError(f"unknown examples choice {examples!r}; valid: {', '.join(EXAMPLES)}")
         self.budget = budget or REFERENCE_BUDGET
         self.perception = perception
         """``state`` (the API reads the simulator) or ``rgbd`` (the cameras: :mod:`capmj.agents.api.perceived`)."""
         self.api = api
         """The planner API level its plans are written against: ``high`` or ``low`` (:data:`~capmj.agents.api.low_level.LEVELS`)."""
+        self.examples = examples
+        """Accepted and recorded like the LLM agent's ``--examples``, so one grid can sweep it: the
+        reference agent reads no prompt, so its plans run the same either way."""
 
     def act(self, ctx: EpisodeContext) -> None:
         code, source = reference_plan(ctx.task, self.api)

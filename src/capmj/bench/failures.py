@@ -17,7 +17,9 @@ documented with examples in ``docs/failures.md``; in short:
    attempt and per episode by :func:`capmj.errors.error_facts`; never by its message): ``no_code``, ``syntax``, ``sandbox_violation``,
    ``budget`` (wall time, lines, elements, API calls, primitives, simulation steps),
    ``unknown_object``, ``perception`` (a pick missed because the perceived point lay off the
-   object, ``PerceptionFailed``; rgbd mode), ``motion`` (unreachable / no grip / wrong object picked), ``api_misuse``
+   object, ``PerceptionFailed``; rgbd mode), ``collision`` (a move of the low-level API touched what it
+   was not meant to, ``CollisionDetected``), ``motion`` (unreachable / no path / IK failure / no grip /
+   wrong object picked), ``api_misuse``
    (an API function rejected its arguments), ``plan_exception`` (the plan's own code raised).
    A last attempt whose plan was not run (identical to attempt j's, see docs/llm.md) is classified
    as attempt j, where its episode ended.
@@ -43,6 +45,7 @@ from typing import Iterable
 
 from capmj.errors import (
     BudgetExceeded,
+    CollisionDetected,
     InfrastructureError,
     LLMError,
     MotionFailed,
@@ -61,7 +64,7 @@ __all__ = ["DRIFT_TOL_M", "LABELS", "breakdown", "classify", "failure_of"]
 
 LABELS: tuple[str, ...] = (
     "no_code", "syntax", "sandbox_violation", "budget", "unknown_object", "api_misuse", "plan_exception",
-    "helper_lmp", "perception", "motion", "physics", "wrong_plan", "reporter_false_positive", "reporter_false_negative",
+    "helper_lmp", "perception", "collision", "motion", "physics", "wrong_plan", "reporter_false_positive", "reporter_false_negative",
     "llm_error", "no_finish", "infrastructure",
 )
 """Every label :func:`classify` can return, in the order tables show them."""
@@ -93,7 +96,8 @@ def _error_label(error_type: str | None, attempt: AttemptRecord | None) -> str:
 
 _KINDS: tuple[tuple[type[BaseException], str], ...] = (
     (NoCodeError, "no_code"), (PlanSyntaxError, "syntax"), (SandboxViolation, "sandbox_violation"),
-    (BudgetExceeded, "budget"), (PerceptionFailed, "perception"), (MotionFailed, "motion"),
+    (BudgetExceeded, "budget"), (PerceptionFailed, "perception"), (CollisionDetected, "collision"),
+    (MotionFailed, "motion"),
     (UnknownObjectError, "unknown_object"),
 )
 """Error classes with a label of their own, tried in this order."""

@@ -6,7 +6,9 @@ model string and the API base *host* (never a key, never the full URL's credenti
 planner API reads (``perception``: ``state`` or the perceiver's name, :mod:`capmj.agents.api.perceived`), the
 sandbox, simulation and LLM budgets, ``PYTHONHASHSEED``, and for ``--interaction multi`` the
 ``interaction`` (its feedback, turn limit and describing model; absent from single-turn manifests), and
-for ``--policy tools`` the ``policy`` (with its turn limit; absent under code).  :func:`differences` lists the
+for ``--policy tools`` the ``policy`` (with its turn limit; absent under code), and the planner API
+level with or without the prompt's examples (``api``: ``{"level", "examples"}`` for ``--api low`` or
+``--examples none``; absent at the defaults, high and full).  :func:`differences` lists the
 manifest entries in which combined runs disagree, for ``report`` to warn about.
 """
 
@@ -35,7 +37,7 @@ __all__ = ["MANIFEST_KEYS", "build_manifest", "differences", "git_state", "packa
 PACKAGES = ("capmj", "mujoco", "dm-control", "numpy", "shapely", "litellm", "trimesh", "rerun-sdk", "openai",
             "httpx")
 MANIFEST_KEYS = ("git", "packages", "prompts", "task_modules", "model", "api_host", "perception", "budgets",
-                 "hash_seed", "interaction", "policy")
+                 "hash_seed", "interaction", "policy", "api")
 """Entries compared between runs (everything but timestamps, price and cache location)."""
 
 
@@ -138,6 +140,7 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "hash_seed": os.environ.get("PYTHONHASHSEED"),
         **_interaction(agent),
         **_policy(agent),
+        **_api_level(agent),
     }
 
 
@@ -157,6 +160,16 @@ def _policy(agent: Any) -> dict[str, Any]:
     if agent_setting(agent, "policy") != "tools":
         return {}
     return {"policy": {"mode": "tools", "max_turns": agent_setting(agent, "max_turns")}}
+
+
+def _api_level(agent: Any) -> dict[str, Any]:
+    """``api`` of an agent at the low API level or without the prompt's examples (``{"api": {"level",
+    "examples"}}``); nothing at the defaults (high, full) and for agents without them, so their
+    manifests stay as they were."""
+    level, examples = agent_setting(agent, "api") or "high", agent_setting(agent, "examples") or "full"
+    if (level, examples) == ("high", "full"):
+        return {}
+    return {"api": {"level": level, "examples": examples}}
 
 
 def _flat(prefix: str, v: Any, out: dict[str, Any]) -> None:

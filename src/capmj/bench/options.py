@@ -102,16 +102,24 @@ AGENT_FLAGS: tuple[Flag, ...] = (
          "--interaction single or multi; docs/llm.md)", choices=POLICIES),
     Flag(("--price",), "price", "declare the model's price in USD per million input,output tokens (local/unlisted "
          "models)", metavar="IN,OUT"),
+    Flag(("--api",), "api", "the planner API level of the llm and reference agents: high (default: pick-and-place "
+         "calls) or low (a robot driver's moves, suction, IK and raw RGB-D images; no pick-and-place; its own prompt; "
+         "docs/api_levels.md)", choices=("high", "low")),
+    Flag(("--examples",), "examples", "the planner prompt with its few-shot examples (full, default) or without any "
+         "(none: the API section unchanged); the reference agent reads no prompt and only records it",
+         choices=("full", "none")),
 )
-"""The LLM agent's own options (after the shared client options of :mod:`capmj.llm.options`)."""
+"""The LLM agent's own options (after the shared client options of :mod:`capmj.llm.options`); ``api`` and
+``examples`` are also the reference agent's."""
 
 AGENT_OPTIONS: tuple[str, ...] = (tuple(o.field for o in LLM_OPTIONS) + tuple(f.dest for f in AGENT_FLAGS)
                                   + (PERCEPTION.dest,))
 """Every agent keyword argument the command line sets (the shared client options by their
-``LLMConfig`` field names); ``perception`` is also the reference agent's."""
+``LLMConfig`` field names); ``perception``, ``api`` and ``examples`` are also the reference agent's."""
 
 LABEL_OPTIONS = ("reporter", "attempts", "temperature", "on_unknown", "replan_temperature", "replan_retries",
-                 "perception", "loop_policy", "reporter_prompt", "interaction", "feedback", "max_turns", "policy")
+                 "perception", "loop_policy", "reporter_prompt", "interaction", "feedback", "max_turns", "policy",
+                 "api", "examples")
 """Agent options that tell configurations apart in report column labels (besides agent and model)."""
 
 

@@ -24,6 +24,7 @@ from capmj.agents.lmp.meter import Price, check_limit, parse_price
 from capmj.agents.lmp.session import DEFAULT_EPISODE_MAX_HELPER_CALLS
 from capmj.agents.llm_agent.loop_policy import check_policy
 from capmj.agents.llm_agent.planner import DEFAULT_PLAN_BUDGET
+from capmj.agents.prompt_files import EXAMPLES, PLANNER_PROMPTS
 from capmj.agents.sandbox import SandboxBudget
 from capmj.errors import ConfigError
 from capmj.llm import LLMConfig
@@ -83,6 +84,11 @@ class LLMAgentOptions:
     replan_retries: int = DEFAULT_REPLAN_RETRIES
     perception: str = "state"
     """The planner API's source: ``capmj.agents.api.perceived.PERCEPTION_MODES`` (checked by the bench's parser)."""
+    api: str = "high"
+    """The planner API level (``--api``): ``high`` (pick-and-place) or ``low`` (a robot driver's moves,
+    :mod:`capmj.agents.api.low_level`), each with its own planner prompt (:data:`capmj.agents.prompt_files.PLANNER_PROMPTS`)."""
+    examples: str = "full"
+    """``--examples``: the planner prompt with its few-shot examples (``full``) or without (``none``)."""
     plan_budget: SandboxBudget = DEFAULT_PLAN_BUDGET
     lmp_budget: SandboxBudget = DEFAULT_LMP_BUDGET
     max_fn_depth: int = 3
@@ -115,6 +121,10 @@ class LLMAgentOptions:
             object.__setattr__(self, name, value)  # normalising a frozen record's own field
 
         set_("loop_policy", check_policy(self.loop_policy))
+        if self.api not in PLANNER_PROMPTS:
+            raise ConfigError(f"unknown API level {self.api!r}; valid levels: {', '.join(PLANNER_PROMPTS)}")
+        if self.examples not in EXAMPLES:
+            raise ConfigError(f"unknown examples choice {self.examples!r}; valid: {', '.join(EXAMPLES)}")
         if self.reporter_prompt not in REPORTER_PROMPTS:
             raise ConfigError(f"unknown reporter prompt {self.reporter_prompt!r}; valid: {', '.join(REPORTER_PROMPTS)}")
         if self.reporter_prompt != "thesis" and self.reporter == "vlm":
