@@ -56,8 +56,7 @@ def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
             if st.get("n"):
                 rates[i, j] = 100 * st["success_rate"]
                 ax.text(j, i, f"{st['successes']}/{st['n']}", ha="center", va="center", fontsize=8)
-    cmap = matplotlib.colormaps["RdYlGn"].copy()
-    cmap.set_bad("#dddddd")
+    cmap = matplotlib.colormaps["RdYlGn"].with_extremes(bad="#dddddd")
     image = ax.imshow(np.ma.masked_invalid(rates), cmap=cmap, vmin=0, vmax=100, aspect="auto", zorder=0)
     ax.set_xticks(range(len(labels)))
     ax.set_xticklabels(labels, fontsize=8, rotation=20, ha="right")

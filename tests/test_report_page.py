@@ -1,0 +1,178 @@
+"""``python -m capmj.bench report RUN… --html``: the page, opened from disk in a real headless Chromium.
+
+Two small real runs are made once for the module (tests/report_runs.py): the LLM agent scripted
+through the stub server on task A × two seeds, whose first plan fails, and the same at another
+temperature (a second configuration), whose plans all succeed.  The page must load from ``file://`` with nothing in the browser's console and
+no resource fetched, show in its DOM the numbers ``summary.json`` holds, and show exactly the
+failed episodes in its gallery, each with its worker-made thumbnail and the command that opens its
+``.rrd``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from report_runs import TASK, llm_run
+
+from capmj.bench.cli import report_main
+from capmj.bench.page import render_page
+from capmj.bench.page.view import legacy_efficiency
+from capmj.bench.results import read_records
+from capmj.bench.rundir import RunDir
+
+FAILING = "llm openai/stub (reporter=none)"
+SOLVING = "llm openai/stub (reporter=none, temperature=0.5)"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    root = tmp_path_factory.mktemp("runs")
+    return (llm_run(root / "llm", [TASK], "10001,10003"),
+            llm_run(root / "llm-t05", [TASK], "10001,10003", "--temperature", "0.5", broken_first=False))
+
+
+def _failed(run: Path) -> list[Any]:
+    return [r for r in read_records(run / "episodes.jsonl")[0] if not r.success]
+
+
+def test_the_worker_draws_the_final_top_down_view_of_failed_episodes_only(runs: tuple[Path, Path]) -> None:
+    from PIL import Image
+
+    from capmj.bench.thumbnail import render_top_view
+    from capmj.tasks import registry
+
+    llm, solving = runs
+    assert not (solving / "thumbs").exists()  # every episode of this run succeeded
+    failed = _failed(llm)
+    assert len(failed) == 1
+    rec = failed[0]
+    thumbs = sorted(p.relative_to(llm).as_posix() for p in (llm / "thumbs").rglob("*.png"))
+    assert thumbs == [RunDir.thumb_relpath(rec.task, rec.seed, rec.agent, rec.model)]
+    image = np.asarray(Image.open(llm / thumbs[0]).convert("RGB"))
+    assert image.shape == (160, 320, 3)
+    # the picture is the final state: the block the plan moved is not where it started
+    start = render_top_view(registry.get_task(rec.task), rec.seed, {})
+    assert np.array_equal(render_top_view(registry.get_task(rec.task), rec.seed, rec.final_poses), image)
+    assert (np.abs(start.astype(int) - image.astype(int)).max(axis=2) > 40).sum() > 100
+
+
+def _cells(summary: dict[str, Any]) -> dict[tuple[str, str], dict[str, Any]]:
+    """(config, task or "" for overall) -> the success cell, from the profile when the summary has one."""
+    prof = summary.get("profile")
+    if prof:
+        out = {(c, t): cell for c, per in prof["cells"].items() for t, cell in per.items()}
+        out.update({(c, ""): cell for c, cell in prof["overall"].items()})
+        return out
+    out = {(c, t): cell for t, per in summary["tasks"].items() for c, cell in per.items()}
+    out.update({(c, ""): cell for c, cell in summary["overall"].items()})
+    return out
+
+
+def _efficiency(summary: dict[str, Any], config: str) -> dict[str, Any]:
+    prof = summary.get("profile")
+    return prof["efficiency"][config] if prof else legacy_efficiency(summary["overall"][config])
+
+
+def _number(text: str) -> float | None:
+    return None if text == "" else float(text)
+
+
+def _open(browser: Any, page: Path) -> list[dict[str, Any]]:
+    browser.get(page.resolve().as_uri())
+    assert browser.execute_script("return document.readyState") == "complete"
+    return [e for e in browser.get_log("browser")]
+
+
+@pytest.mark.browser
+def test_the_page_opens_from_disk_shows_the_summary_and_the_failed_episodes(runs: tuple[Path, Path], browser: Any,
+                                                                          tmp_path: Path) -> None:
+    from selenium.webdriver.common.by import By
+
+    llm, solving = runs
+    out = tmp_path / "cmp"
+    assert report_main([str(llm), str(solving), "--out", str(out), "--html"]) == 0
+    page = out / "report.html"
+    summary = json.loads((out / "summary.json").read_text())
+    log = _open(browser, page)
+    assert log == [], log  # no console error, no warning, nothing blocked by the page's CSP
+    assert browser.execute_script("return performance.getEntriesByType('resource').length") == 0
+    links = browser.execute_script("return [...document.querySelectorAll('[src],[href]')]"
+                                   ".map(e => e.getAttribute('src') || e.getAttribute('href'))")
+    assert links and all(x.startswith(("data:", "#")) for x in links), links  # nothing outside the file
+    # every picture decoded (plots as SVG, thumbnails as PNG, all data: URIs)
+    images = browser.find_elements(By.TAG_NAME, "img")
+    assert len(images) >= 3
+    assert all(browser.execute_script("return arguments[0].complete && arguments[0].naturalWidth > 0", i)
+               for i in images)
+
+    # the profile table: every cell's numbers are summary.json's
+    cells = _cells(summary)
+    shown = {}
+    for td in browser.find_elements(By.CSS_SELECTOR, "#profile-table td.rate"):
+        key = (td.get_attribute("data-config"), td.get_attribute("data-task"))
+        if td.get_attribute("data-n") == "0":
+            assert key not in cells
+            continue
+        shown[key] = {k: _number(td.get_attribute(f"data-{k}")) for k in ("n", "successes", "rate", "lo", "hi")}
+    assert set(shown) == set(cells)
+    for key, cell in cells.items():
+        assert shown[key] == {"n": cell["n"], "successes": cell["successes"], "rate": cell["success_rate"],
+                              "lo": cell["ci95"][0], "hi": cell["ci95"][1]}, key
+    assert shown[(FAILING, "")]["rate"] == 0.5 and shown[(SOLVING, "")]["rate"] == 1.0
+
+    # the efficiency table: per episode and per solved episode
+    for row in browser.find_elements(By.CSS_SELECTOR, "#efficiency-table tr[data-config]"):
+        eff = _efficiency(summary, row.get_attribute("data-config"))
+        for td in row.find_elements(By.CSS_SELECTOR, "td[data-metric]"):
+            want = eff[td.get_attribute("data-per")][td.get_attribute("data-metric")]
+            assert _number(td.get_attribute("data-value")) == want
+    row = browser.find_element(By.CSS_SELECTOR, f'#efficiency-table tr[data-config="{FAILING}"]')
+    tokens = row.find_element(By.CSS_SELECTOR, 'td[data-metric="tokens"][data-per="per_solved"]')
+    total = summary["overall"][FAILING]["llm_usage"]["tokens"]
+    assert _number(tokens.get_attribute("data-value")) == total / 1 > 0  # one episode solved
+
+    # the paired comparison: the second configuration solved the pair the first failed
+    (table,) = browser.find_elements(By.CSS_SELECTOR, "table.comparison")
+    overall = table.find_element(By.CSS_SELECTOR, 'tr[data-task=""]')
+    assert (overall.get_attribute("data-n"), overall.get_attribute("data-only-a"),
+            overall.get_attribute("data-only-b")) == ("2", "0", "1")
+
+    # the gallery: exactly the failed episodes, each with its thumbnail, label and .rrd command
+    cards = browser.find_elements(By.CSS_SELECTOR, "#gallery article.failed-episode")
+    failed = _failed(llm)
+    assert sorted((c.get_attribute("data-task"), c.get_attribute("data-seed")) for c in cards) == \
+        sorted((r.task, str(r.seed)) for r in failed)
+    card, rec = cards[0], failed[0]
+    assert card.get_attribute("data-failure") == rec.failure == "unknown_object"
+    thumb = card.find_element(By.TAG_NAME, "img")
+    assert browser.execute_script("return arguments[0].naturalWidth", thumb) == 320
+    assert "fixed purple bowl with obj_id 99" in card.text  # the error message
+    card.find_element(By.CSS_SELECTOR, "details.attempt summary").click()
+    assert "put_first_on_second(blocks[1], 'fixed purple bowl with obj_id 99')" in \
+        card.find_element(By.CSS_SELECTOR, "pre.code").text
+    command = card.find_element(By.CSS_SELECTOR, "code.cmd").text
+    rrd = (llm / str(rec.rrd)).resolve()
+    assert rrd.is_file() and command == f"capmj-replay {rrd} --open"
+    browser.save_screenshot(str(tmp_path / "page.png"))
+
+
+def test_a_run_without_thumbnails_profile_or_anomalies_still_gets_a_page(runs: tuple[Path, Path],
+                                                                       tmp_path: Path) -> None:
+    """An older run: no thumbs/, a summary with only the per-task cells — the page says what is missing."""
+    import shutil
+
+    llm, _ = runs
+    old = tmp_path / "old"
+    shutil.copytree(llm, old)
+    shutil.rmtree(old / "thumbs")
+    summary = json.loads((llm / "summary.json").read_text())
+    for key in ("profile", "anomalies", "stamp"):
+        summary.pop(key, None)
+    html = render_page(summary, [old])
+    assert 'data-source="tasks"' in html
+    assert "no thumbnail" in html and "no anomaly accounting" in html
+    assert html.count('class="failed-episode"') == 1
