@@ -284,6 +284,7 @@ def loop_stats(records: Sequence[Episode]) -> dict[str, Any] | None:
         "mean_prompt_tokens": sum(prompt) / n,
         "mean_completion_tokens": sum(completion) / n,
         **_turn_stats(eps),
+        **_tool_stats(eps),
     }
 
 
@@ -299,6 +300,23 @@ def _turn_stats(eps: Sequence[Episode]) -> dict[str, Any]:
         "finished": len(finished), "finish_agree": agree, "finish_false_positives": len(finished) - agree,
         "finish_agreement": _share(agree, len(finished)),
         "no_finish": sum(m.stopped == TURNS_USED_UP for m in multi)}}
+
+
+def _tool_stats(eps: Sequence[Episode]) -> dict[str, Any]:
+    """``{"tools": ...}`` of the ``--policy tools`` episodes among ``eps``: turns, function calls and how
+    many the model wrote as JSON in its text (``content_json``), episodes the model ended (no call or
+    FINISH) and whether the predicate then held, episodes out of turns; {} without any."""
+    tools = [r.llm for r in eps if r.llm is not None and r.llm.policy == "tools"]
+    if not tools:
+        return {}
+    calls = [c for m in tools for t in m.attempts for c in t.tool_calls or ()]
+    in_text = sum(c.form == "content_json" for c in calls)
+    return {"tools": {
+        "episodes": len(tools), "mean_turns": sum(len(m.attempts) for m in tools) / len(tools),
+        "calls": len(calls), "content_json_calls": in_text, "content_json_share": _share(in_text, len(calls)),
+        "ended_by_model": sum(m.finish_agreed is not None for m in tools),
+        "finish_agree": sum(m.finish_agreed is True for m in tools),
+        "no_finish": sum(m.stopped == TURNS_USED_UP for m in tools)}}
 
 
 def config_of(rec: Episode) -> tuple[str, str | None]:
