@@ -38,8 +38,9 @@ def test_the_configuration_is_frozen_and_read_from_the_command_line_once() -> No
     inv, given = read_command_line(build_parser().parse_args(argv), argv)
     config = BenchConfig.resolve(given)
     assert config.agent == "llm" and config.execution == Execution(1, 1, 3, "local", None)
+    # --reporter text without a loop policy or prompt gets the ones measured never to hurt (#49 item 7)
     assert config.agent_options == {"model": "openai/m", "timeout_s": 600.0, "reporter": "text", "cache_only": True,
-                                    "cache_dir": "/tmp/c"}
+                                    "cache_dir": "/tmp/c", "loop_policy": "careful", "reporter_prompt": "relations"}
     assert not config.log and config.run_budget.max_tokens == 1000 and inv.run_dir.root == Path("runs/x")
     with pytest.raises(FrozenInstanceError):
         config.agent = "oracle"  # type: ignore[misc]

@@ -21,7 +21,9 @@ import sys
 from pathlib import Path
 from typing import Callable, NamedTuple, NoReturn, Sequence, cast
 
+from capmj.bench.anomalies import DEFAULT_THRESHOLD
 from capmj.bench.config import DEFAULT_TASKS
+from capmj.bench.configs import TIERS
 from capmj.bench.options import PERCEPTION, add_agent_flags, budget_flags, execution_flags
 from capmj.bench.report import report
 from capmj.bench.run import CONFIRM_LLM_EPISODES, EXIT_BUDGET, one_line, prepare_out, run_grid
@@ -84,6 +86,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"seeds as a list '1,3,5' and/or ranges 'start:stop[:step]' (stop excluded); "
                         f"default: the test split {TEST_SEEDS} (50 odd seeds from 10001)")
     p.add_argument("--agent", default=None, help="agent: oracle (default), reference, llm")
+    cf = p.add_argument_group("configurations: a grid axis (docs/bench.md)")
+    cf.add_argument("--configs", default=None, metavar="A,B,...",
+                    help="run each named configuration of the agent on the same tasks × seeds into this one folder, "
+                         "the first the baseline of the profile's paired comparisons; the shipped tiers: "
+                         + ", ".join(c.name for c in TIERS) + " (--list-configs), or your own from --configs-file")
+    cf.add_argument("--configs-file", type=Path, default=None, metavar="FILE.toml",
+                    help="your own configurations: [configs.NAME] tables of agent options (optionally extends = "
+                         "\"TIER\")")
+    cf.add_argument("--list-configs", action="store_true", help="list the configurations, their options and "
+                    "whether this capmj can run them")
+    cf.add_argument("--anomaly-threshold", type=float, default=None, metavar="SHARE",
+                    help=f"anomaly share above which the summary's first line warns (default: {DEFAULT_THRESHOLD}); "
+                         "anomalies (provider errors after retries, quota, an unanswered server, a crash inside "
+                         "capmj) never count as the agent's failures")
+    cf.add_argument("--no-probe", action="store_true", help="do not ask the LLM server once before the grid starts "
+                    "(by default an unreachable server or a refused key stops the run at once, exit 2)")
     PERCEPTION.add_to(p)
     g = p.add_argument_group("LLM agent options (passed to the agent; see docs/llm.md)")
     add_agent_flags(g)  # --model, --api-base, --temperature, --llm-timeout, ..., then --reporter, --attempts, ...
@@ -126,6 +144,12 @@ def build_report_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="write summary.json/md/png here (default: into DIR when there is one DIR, else print only)")
     p.add_argument("--json", action="store_true", help="print summary JSON instead of Markdown")
+    p.add_argument("--allow-version-mismatch", action="store_true",
+                   help="compare runs whose task stamps differ (a task's code, the MJCF templates, the prompts or "
+                        "capmj's version changed between them); by default report refuses them")
+    p.add_argument("--anomaly-threshold", type=float, default=None, metavar="SHARE",
+                   help=f"anomaly share above which the summary's first line warns (default: the run's, else "
+                        f"{DEFAULT_THRESHOLD})")
     p.add_argument("--html", nargs="?", const="", default=None, type=str, metavar="OUT.html",
                    help="also write one self-contained page (heat map, bars, efficiency, anomalies, failure "
                         "gallery; opens from disk), to OUT.html or report.html in the output folder (or here)")
@@ -162,13 +186,23 @@ def _list_tasks() -> int:
     return 0
 
 
+def _list_configs(path: Path | None) -> int:
+    from capmj.bench.configs import listing, load_file
+
+    print(f"configurations (shipped tiers{' and ' + str(path) if path else ''}):")
+    for line in listing(TIERS + (load_file(path) if path else ())):
+        print(line)
+    return 0
+
+
 def report_main(argv: Sequence[str]) -> int:
     args = build_report_parser().parse_args(list(argv))
     out = args.out if args.out is not None else (args.dirs[0] if len(args.dirs) == 1 else None)
     try:
         if out is not None:
             prepare_out(out)
-        summary, md = report(args.dirs, out)
+        summary, md = report(args.dirs, out, allow_version_mismatch=args.allow_version_mismatch,
+                             anomaly_threshold=args.anomaly_threshold)
     except ConfigError as exc:
         print(f"capmj-bench report: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
@@ -206,6 +240,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.list:
             return _list_tasks()
+        if args.list_configs:
+            return _list_configs(args.configs_file)
         return run_grid(args, argv)
     except ConfigError as exc:
         print(f"capmj-bench: error: {one_line(str(exc))}", file=sys.stderr)

@@ -19,9 +19,10 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Mapping, Sequence
 
+from capmj.bench.configs import Configuration, merged, with_measured_defaults
 from capmj.bench.executor import Execution
 from capmj.bench.options import AGENT_OPTIONS, EXECUTION_OPTIONS, LLM_CONCURRENCY
 from capmj.bench.seeds import TEST_SEEDS
@@ -47,6 +48,8 @@ class Given:
     log_images: bool | None = None
     max_cost_usd: float | None = None
     max_tokens: int | None = None
+    configs: tuple[Configuration, ...] | None = None
+    """The ``--configs`` configurations (None: not given)."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,9 @@ class BenchConfig:
     log: bool = True
     log_images: bool = False
     run_budget: RunBudget = field(default_factory=RunBudget)
+    configs: tuple[Configuration, ...] = ()
+    """The grid's configurations (``--configs``), each with its options merged over ``agent_options``
+    (:func:`capmj.bench.configs.merged`); empty: one unnamed configuration, ``agent_options``."""
 
     def __post_init__(self) -> None:
         unknown = sorted(set(self.agent_options) - set(AGENT_OPTIONS))
@@ -74,6 +80,13 @@ class BenchConfig:
         """How workers build the agent (``--log-images`` makes it log camera images)."""
         return AgentSpec(self.agent, dict(self.agent_options), self.log_images)
 
+    def agent_specs(self) -> list[tuple[str | None, AgentSpec]]:
+        """``(configuration name, how workers build its agent)`` of each configuration of the grid,
+        in order; one unnamed one without ``--configs``."""
+        if not self.configs:
+            return [(None, self.agent_spec)]
+        return [(c.name, AgentSpec(self.agent, dict(c.options), self.log_images)) for c in self.configs]
+
     # .................................................................. config.json
     def to_args(self) -> dict[str, Any]:
         """The ``args`` object of ``config.json``."""
@@ -81,7 +94,8 @@ class BenchConfig:
         return {"tasks": self.tasks, "seeds": self.seeds, "agent": self.agent, "agent_options": dict(self.agent_options),
                 "workers": e.workers, "concurrency": e.concurrency, "max_llm_concurrency": e.max_llm_concurrency,
                 "executor": e.executor, "ray_address": e.ray_address, "log": self.log, "log_images": self.log_images,
-                "run_budget": self.run_budget.as_dict()}
+                "run_budget": self.run_budget.as_dict(),
+                **({"configs": [c.as_dict() for c in self.configs]} if self.configs else {})}
 
     @classmethod
     def from_args(cls, args: Mapping[str, Any]) -> "BenchConfig":
@@ -91,7 +105,8 @@ class BenchConfig:
         execution = {k: args[k] for k in EXECUTION_OPTIONS if args.get(k) is not None}
         return cls(args.get("tasks") or DEFAULT_TASKS, args.get("seeds") or TEST_SEEDS, agent, options,
                    _execution(execution, agent), bool(args.get("log", True)), bool(args.get("log_images", False)),
-                   RunBudget.resolve(None, None, args.get("run_budget")))
+                   RunBudget.resolve(None, None, args.get("run_budget")),
+                   tuple(Configuration.from_dict(c) for c in args.get("configs") or ()))
 
     # .................................................................. from a command line
     @classmethod
@@ -103,6 +118,13 @@ class BenchConfig:
         same_agent = earlier is not None and agent == earlier.agent
         options = dict(earlier.agent_options) if same_agent and earlier else {}
         options.update(given.agent_options)
+        configs: tuple[Configuration, ...] = ()
+        if given.configs is not None:  # each over the shared options; a reporter gets the measured loop
+            configs = tuple(replace(c, options=with_measured_defaults(merged(c, options))) for c in given.configs)
+        elif same_agent and earlier is not None:  # a resume: what each ran with, the resume's options on top
+            configs = tuple(replace(c, options={**c.options, **given.agent_options}) for c in earlier.configs)
+        if earlier is None:  # a new run: a reporter gets the measured loop (a resume keeps what it ran with)
+            options = with_measured_defaults(options)
         execution = dict(_values(earlier.execution) if earlier else {})
         execution.update(given.execution)
         if earlier is not None and given.log is None and given.log_images is None:
@@ -113,7 +135,7 @@ class BenchConfig:
         return cls(given.tasks or (earlier.tasks if earlier else DEFAULT_TASKS),
                    given.seeds or (earlier.seeds if earlier else TEST_SEEDS), agent, options,
                    _execution(execution, agent), log, images,
-                   RunBudget.resolve(given.max_cost_usd, given.max_tokens, stored_budget))
+                   RunBudget.resolve(given.max_cost_usd, given.max_tokens, stored_budget), configs)
 
 
 def _values(e: Execution) -> dict[str, Any]:
@@ -201,7 +223,9 @@ def config_json(config: BenchConfig, argv: Sequence[str], grid: Mapping[str, Any
     out = {k: v for k, v in stored.items() if k != "resumed_at"}
     entry: dict[str, Any] = {"at": now(), "argv": list(argv),
                              "changed": changes(effective_args(stored), config.to_args())}
-    for key in ("tasks", "seeds", "agent", "model", "versions", "manifest"):
+    for key in ("tasks", "seeds", "agent", "model", "versions", "manifest", "stamp", "configurations"):
+        if key not in grid:
+            continue
         if key not in out:
             out[key] = grid[key]
         elif out[key] != grid[key]:

@@ -188,15 +188,18 @@ def make_executor(agent: AgentSpec, execution: Execution, *, on_result: OnResult
 
 def run_jobs_to_file(jobs: Sequence[Job], agent: AgentSpec, execution: Execution, *, run_dir: RunDir,
                      writer: ResultsWriter, progress: Callable[[EpisodeRecord], None] | None = None,
-                     registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None) -> GridStats:
+                     registered: Sequence[Any] = (), stop: Callable[[], bool] | None = None,
+                     config: str | None = None) -> GridStats:
     """Run ``jobs`` and append each record to ``writer``: LLM calls moved to the episode's transcript
-    file, ``rrd`` made relative to the run folder, the failure classified."""
+    file, ``rrd`` made relative to the run folder, the failure classified, and the record named
+    after its configuration (``config``, of a ``--configs`` grid; None: the run's only one)."""
     run_dir = run_dir.resolved()
 
     def on_result(job: Job, result: EpisodeResult) -> None:
-        transcript = write_calls(run_dir.root, result)
+        transcript = write_calls(run_dir.root, result, config)
         rrd = run_dir.relative(result.rrd) if result.rrd else result.rrd
-        rec = EpisodeRecord.of(replace(result, rrd=rrd, calls=()), failure=classify(result), transcript=transcript)
+        rec = EpisodeRecord.of(replace(result, rrd=rrd, calls=()), failure=classify(result), transcript=transcript,
+                               config=config)
         writer.write(rec)
         if progress is not None:
             progress(rec)

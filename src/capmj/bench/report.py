@@ -33,14 +33,17 @@ from capmj.bench.results import (
     write_result_json,
 )
 from capmj.bench.options import LABEL_OPTIONS
+from capmj.bench.anomalies import DEFAULT_THRESHOLD, headline
 from capmj.bench.sections import (
+    anomaly_section,
     comparison_section,
     cost_section,
     failure_section,
     perception_section,
+    profile_section,
+    stamp_lines,
     warnings_section,
 )
-from capmj.bench.stats import paired_comparison
 from capmj.errors import ConfigError
 from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
@@ -92,10 +95,13 @@ def _success_table(summary: Mapping[str, Any], tasks: Sequence[str], labels: Seq
 def pct_cell(st: Mapping[str, Any] | None, show_n: bool = False) -> str:
     """``"96 % [87–99]"`` (success rate and 95 % Wilson interval, rounded to whole percent)."""
     if not st or not st.get("n"):
-        return "—"
+        return "—" if not st or not st.get("anomalies") else f"— (n=0, {st['anomalies']} anomalies excluded)"
     lo, hi = st["ci95"]
     cell = f"{round(100 * st['success_rate'])} % [{round(100 * lo)}–{round(100 * hi)}]"
-    return cell + (f" (n={st['n']})" if show_n else "")
+    if not show_n:
+        return cell
+    excluded = st.get("anomalies") or 0
+    return cell + f" (n={st['n']}" + (f", {excluded} anomal{'ies' if excluded != 1 else 'y'} excluded" if excluded else "") + ")"
 
 
 def _fmt(v: Any, nd: int = 2) -> str:
@@ -110,9 +116,11 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     tasks = sorted(summary["tasks"], key=_order)
     generated = [t for t in tasks if t in GENERATED_NUMBERS]
     others = [t for t in tasks if t not in GENERATED_NUMBERS]
-    out = [f"# {title}", ""]
+    warning = headline(summary.get("anomalies") or {})
+    out = ([warning, ""] if warning else []) + [f"# {title}", ""]
     if sources:
         out += ["Sources: " + ", ".join(f"`{s}`" for s in sources), ""]
+    out += stamp_lines(summary.get("stamp"))
     out += ["Success rate per task with its 95 % Wilson interval; n = episodes (seeds) per cell.", ""]
     seen = {lab: (c or {}).get("perception") for lab, c in (summary.get("configs") or {}).items()}
     if any(seen.values()):  # what the planner API read: the simulator (state) or the cameras (docs/perception.md)
@@ -147,7 +155,9 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     out += _turns_table(rows, labels)
     out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
     out += cost_section(summary, task_label, _order)
+    out += profile_section(summary.get("profile"))
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
+    out += anomaly_section(summary.get("anomalies"), task_label)
     out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"
 
@@ -285,6 +295,46 @@ def _options_suffix(cfg: Mapping[str, Any] | None) -> str:
     return f" ({', '.join(parts)})" if parts else ""
 
 
+def _column(r: EpisodeRecord) -> tuple[str, str | None] | str:
+    """What makes a column within one folder: the record's configuration name, else (agent, model)."""
+    return r.config if r.config is not None else config_of(r)
+
+
+def stored_stamp(cfg: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """The task stamp a folder's ``config.json`` holds: that of its latest part (a resume under a
+    changed task set records its own), None for a run from before stamps."""
+    if not cfg:
+        return None
+    stamp = cfg.get("stamp")
+    for r in cfg.get("resumes") or []:
+        stamp = r.get("stamp") or stamp
+    return stamp
+
+
+def combined_stamp(stamps: Mapping[str, Mapping[str, Any] | None], tasks: Sequence[str],
+                   allow_mismatch: bool) -> tuple[dict[str, Any] | None, list[str]]:
+    """The stamp of the tasks several runs report together (each task's from the first run that
+    has it) and the mismatches of the tasks they share.  Mismatches are a ``ConfigError`` unless
+    ``allow_mismatch``; then they are returned to be printed."""
+    from capmj.bench.stamp import SCHEMA, mismatches, overall
+
+    problems = mismatches(stamps, tasks)
+    if problems and not allow_mismatch:
+        raise ConfigError("the runs are not comparable: " + "; ".join(problems)
+                          + " (add --allow-version-mismatch to compare them anyway)")
+    have = [s for s in stamps.values() if s]
+    if not have:
+        return None, problems
+    per: dict[str, Any] = {}
+    for s in have:
+        for task, entry in (s.get("tasks") or {}).items():
+            if task in tasks:
+                per.setdefault(task, entry)
+    first = have[0]
+    return {"schema": SCHEMA, "overall": overall(per), "capmj": first.get("capmj"), "mjcf": first.get("mjcf"),
+            "prompts": first.get("prompts"), "tasks": per}, problems
+
+
 def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[int, str], list[str]]:
     """Records of several result folders with a column label per record (by ``id``).
 
@@ -301,10 +351,10 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[
             raise ConfigError(f"{d} is not a result folder (no {EPISODES})")
         records, _ = read_records(f)
         per_folder.append((d, records, _options_suffix(load_json(d / CONFIG))))
-    base: dict[tuple[int, tuple[str, str | None]], str] = {}
+    base: dict[tuple[int, tuple[str, str | None] | str], str] = {}
     for i, (d, records, suffix) in enumerate(per_folder):
         for r in records:
-            base.setdefault((i, config_of(r)), default_label(*config_of(r)) + suffix)
+            base.setdefault((i, _column(r)), r.config if r.config is not None else default_label(*config_of(r)) + suffix)
     counts: dict[str, int] = {}
     for lab in base.values():
         counts[lab] = counts.get(lab, 0) + 1
@@ -313,23 +363,43 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[
     labels: dict[int, str] = {}
     for i, (d, records, _) in enumerate(per_folder):
         for r in records:
-            labels[id(r)] = final[(i, config_of(r))]
+            labels[id(r)] = final[(i, _column(r))]
             out.append(r)
     return out, labels, [str(d) for d, _, _ in per_folder]
 
 
-def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> tuple[dict[str, Any], str]:
-    """Summary and Markdown over one or several result folders; written to ``out_dir`` when given."""
+def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None, *, allow_version_mismatch: bool = False,
+           anomaly_threshold: float | None = None) -> tuple[dict[str, Any], str]:
+    """Summary and Markdown over one or several result folders; written to ``out_dir`` when given.
+
+    Several folders are compared only when the task stamps of the tasks they share match
+    (:mod:`capmj.bench.stamp`; ``ConfigError`` otherwise, unless ``allow_version_mismatch``, when
+    the mismatches go to ``stamp_mismatches``).  ``summary["stamp"]`` is the reported tasks' stamp,
+    ``summary["stamps"]`` each folder's overall stamp.  The anomaly threshold is the given one,
+    else the first folder's summary's, else the default."""
     records, labels, sources = load_folders(dirs)
-    summary = summarize(records, label_of=lambda r: labels[id(r)])
+    configs = {str(d): load_json(Path(d) / CONFIG) for d in dirs}
+    stamps = {src: stored_stamp(cfg) for src, cfg in configs.items()}
+    tasks = sorted({r.task for r in records})
+    stamp, problems = (combined_stamp(stamps, tasks, allow_version_mismatch) if len(dirs) > 1
+                       else (stamps[str(dirs[0])], []))
+    if anomaly_threshold is None:
+        previous = load_json(Path(dirs[0]) / SUMMARY_JSON) or {}
+        anomaly_threshold = (previous.get("anomalies") or {}).get("threshold", DEFAULT_THRESHOLD)
+    summary = summarize(records, label_of=lambda r: labels[id(r)], anomaly_threshold=float(anomaly_threshold))
     summary["sources"] = sources
-    cols = list(summary["overall"])
-    summary["comparisons"] = [paired_comparison(records, lambda r: labels[id(r)], cols[0], other)
-                              for other in cols[1:]]
+    summary["stamp"] = stamp
+    summary["stamps"] = {src: (s or {}).get("overall") for src, s in stamps.items()}
+    if problems:
+        summary["stamp_mismatches"] = problems
+    for cfg in configs.values():
+        for member in (cfg or {}).get("configurations") or []:
+            if member.get("name") in summary["configs"]:
+                summary["configs"][member["name"]].setdefault("options", member.get("options") or {})
     if len(dirs) > 1:
         names = [str(d) for d in dirs]
-        summary["warnings"] = differences({n: (load_json(Path(d) / CONFIG) or {}).get("manifest")
-                                           for n, d in zip(names, dirs)})
+        summary["warnings"] = problems + differences({n: (load_json(Path(d) / CONFIG) or {}).get("manifest")
+                                                      for n, d in zip(names, dirs)})
     if out_dir is not None and len(dirs) == 1 and Path(out_dir).resolve() == Path(dirs[0]).resolve():
         previous = load_json(Path(out_dir) / SUMMARY_JSON) or {}
         if "run" in previous:  # keep the timing facts of the run that produced the folder

@@ -21,15 +21,19 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from capmj.atomic import write_json_atomic
+from capmj.bench.anomalies import DEFAULT_THRESHOLD, denominator, section, split
 from capmj.bench.failures import breakdown
 from capmj.bench.migrate import as_record, load_record
+from capmj.bench.profile import profile
 from capmj.bench.rundir import CONFIG, EPISODES, SUMMARY_JSON, SUMMARY_MD, SUMMARY_PNG
 from capmj.bench.spend import usage
+from capmj.bench.stats import wilson
 from capmj.errors import RecordError
 from capmj.records import Episode, EpisodeRecord, Key
 from capmj.records.notes import TURNS_USED_UP
 
-SUMMARY_SCHEMA = "capmj.bench-summary/1"
+SUMMARY_SCHEMA = "capmj.bench-summary/2"
+"""``/2``: rates over the agent's episodes, anomalies apart (``anomalies``), ``profile``, ``stamp``."""
 REQUIRED_KEYS: tuple[str, ...] = ("task", "seed", "agent", "model", "success", "progress", "primitives",
                                   "wall_s", "error", "rrd")
 
@@ -49,7 +53,7 @@ def read_records(path: str | Path) -> tuple[list[EpisodeRecord], int]:
     path = Path(path)
     if not path.exists():
         return [], 0
-    records: dict[Key, EpisodeRecord] = {}
+    records: dict[tuple[str | None, str, int, str, str | None], EpisodeRecord] = {}
     bad = 0
     with open(path, "rb") as f:
         data = f.read()
@@ -61,7 +65,7 @@ def read_records(path: str | Path) -> tuple[list[EpisodeRecord], int]:
         except (ValueError, RecordError):
             bad += 1
             continue
-        records[rec.key] = rec
+        records[rec.grid_key] = rec
     return list(records.values()), bad
 
 
@@ -136,20 +140,16 @@ def sanitize(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------- statistics
-def wilson(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
-    """The Wilson score interval of a binomial proportion (95 % by default); (0, 1) when n = 0."""
-    if n <= 0:
-        return 0.0, 1.0
-    p = successes / n
-    denom = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
-    return max(0.0, centre - half), min(1.0, centre + half)
-
-
 def stats(records: Sequence[EpisodeRecord]) -> dict[str, Any]:
     """n, successes, success rate with its 95 % Wilson interval, means and wall-time totals; for
-    LLM episodes also ``loop`` (:func:`loop_stats`: verdicts, reporter accuracy, re-plans, tokens)."""
+    LLM episodes also ``loop`` (:func:`loop_stats`: verdicts, reporter accuracy, re-plans, tokens).
+
+    Everything but ``llm_usage`` (what was really spent) is over the agent's episodes: ``n`` leaves
+    out the anomalies (:mod:`capmj.bench.anomalies`), counted in ``anomalies`` (by label in
+    ``anomaly_labels``); ``episodes`` = n + anomalies; ``denominator`` is the text printed beside
+    the rate (``"12/18 episodes, 2 anomalies excluded"``)."""
+    everything = list(records)
+    records, anomalous = split(everything)
     n = len(records)
     k = sum(1 for r in records if r.success)
     lo, hi = wilson(k, n)
@@ -161,8 +161,12 @@ def stats(records: Sequence[EpisodeRecord]) -> dict[str, Any]:
     wall = [float(r.wall_s) for r in records if r.wall_s is not None]
     out = {
         "failures": breakdown(records),
-        "llm_usage": usage(records),
+        "llm_usage": usage(everything),
         "n": n,
+        "episodes": len(everything),
+        "anomalies": len(anomalous),
+        "anomaly_labels": breakdown(anomalous),
+        "denominator": f"{k}/" + denominator(n, len(anomalous)),
         "successes": k,
         "success_rate": k / n if n else None,
         "ci95": [lo, hi],
@@ -327,12 +331,20 @@ def default_label(agent: str, model: str | None) -> str:
     return agent if not model else f"{agent} {model}"
 
 
+def record_label(rec: EpisodeRecord) -> str:
+    """A record's configuration label: its ``--configs`` name, else ``agent model``."""
+    return rec.config if rec.config is not None else default_label(*config_of(rec))
+
+
 def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
-              label_of: Callable[[EpisodeRecord], str] | None = None) -> dict[str, Any]:
+              label_of: Callable[[EpisodeRecord], str] | None = None,
+              anomaly_threshold: float = DEFAULT_THRESHOLD) -> dict[str, Any]:
     """Per-task and overall statistics for each configuration found in ``records``.
 
-    A configuration is (agent, model) unless ``label_of`` maps records to other labels (e.g. one
-    per result folder).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
+    A configuration is a record's ``--configs`` name, else (agent, model), unless ``label_of`` maps
+    records to other labels (e.g. one per result folder).  ``summary["anomalies"]`` counts and
+    lists the episodes that failed through no fault of the agent
+    (:func:`capmj.bench.anomalies.section`; ``exceeded`` when their share is above ``anomaly_threshold``).  ``summary["tasks"][task][label]`` and ``summary["overall"][label]`` hold
     :func:`stats`; ``summary["configs"][label]`` says which agent/model a label stands for and what
     its planner API read (``perception``: the perceiver of rgbd episodes; absent for the simulator).
     Parsed lines (dicts) are loaded as records first (:func:`capmj.bench.migrate.as_record`).
@@ -344,7 +356,7 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
     tasks: list[str] = []
     for r in recs:
         cfg = config_of(r)
-        label = label_of(r) if label_of else default_label(*cfg)
+        label = label_of(r) if label_of else record_label(r)
         configs.setdefault(label, {"agent": cfg[0], "model": cfg[1], "perception": set()})["perception"].add(
             r.perception.perceiver if r.perception is not None else "state")
         t = r.task
@@ -356,11 +368,15 @@ def summarize(records: Iterable[EpisodeRecord | Mapping[str, Any]],
         seen = c.pop("perception") - {"state"}
         if seen:
             c["perception"] = ", ".join(sorted(seen))
+    prof = profile(recs, label_of or record_label, order=list(overall))
     return {
         "schema": SUMMARY_SCHEMA,
         "configs": configs,
         "tasks": {t: {lab: stats(rs) for lab, rs in by[t].items()} for t in sorted(tasks)},
         "overall": {lab: stats(rs) for lab, rs in overall.items()},
+        "anomalies": section(recs, anomaly_threshold, label_of or record_label),
+        "profile": prof,
+        "comparisons": prof["paired"],
     }
 
 
@@ -380,7 +396,7 @@ def write_result_json(path: str | Path, data: Any) -> None:
 
 __all__ = [
     "CONFIG", "EPISODES", "REQUIRED_KEYS", "ResultsWriter", "SUMMARY_JSON", "SUMMARY_MD", "SUMMARY_PNG",
-    "config_of", "default_label", "episode_key", "load_json", "loop_stats", "perception_stats", "read_records", "read_results", "sanitize",
+    "config_of", "default_label", "record_label", "episode_key", "load_json", "loop_stats", "perception_stats", "read_records", "read_results", "sanitize",
     "stats",
     "summarize",
     "wilson", "write_result_json",

@@ -20,17 +20,22 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 
 from capmj.agents.factory import make_agent
+from capmj.bench.anomalies import DEFAULT_THRESHOLD, headline
 from capmj.bench.config import BenchConfig, Given, config_json, stored_config
+from capmj.bench.configs import load_file as load_configs_file
+from capmj.bench.configs import resolve as resolve_configs
 from capmj.bench.grid import run_jobs_to_file
 from capmj.bench.manifest import run_manifest
 from capmj.bench.options import EXECUTION_OPTIONS, given_agent_options, given_values
 from capmj.bench.pool import stop_resource_tracker
+from capmj.bench.probe import probe_agents
 from capmj.bench.report import pct_cell, write_summary
 from capmj.bench.results import ResultsWriter, load_json, read_records, summarize, write_result_json
 from capmj.bench.rundir import EPISODES, RunDir
 from capmj.bench.seeds import TEST_SEEDS, parse_seeds
 from capmj.bench.spend import BudgetTracker
-from capmj.bench.worker import Job
+from capmj.bench.stamp import mismatches, short, task_set_stamp
+from capmj.bench.worker import AgentSpec, Job
 from capmj.errors import CapmjError, ConfigError
 from capmj.tasks import registry
 
@@ -57,6 +62,10 @@ class Invocation:
     seeds_given: bool
     yes: bool
     show_progress: bool
+    anomaly_threshold: float = DEFAULT_THRESHOLD
+    """Anomaly share above which the summary's first line says so (``--anomaly-threshold``)."""
+    probe: bool = True
+    """Ask each LLM configuration's server once before the grid starts (``--no-probe``: don't)."""
 
 
 def read_command_line(args: argparse.Namespace, argv: Sequence[str]) -> tuple[Invocation, Given]:
@@ -67,33 +76,70 @@ def read_command_line(args: argparse.Namespace, argv: Sequence[str]) -> tuple[In
         out = Path("runs") / time.strftime("%Y%m%d-%H%M%S")
     else:
         out = Path(args.out)
+    threshold = getattr(args, "anomaly_threshold", None)
+    if threshold is not None and not 0 <= threshold <= 1:
+        raise ConfigError(f"--anomaly-threshold must be a share from 0 to 1 (0.1 = 10 %), got {threshold}")
     inv = Invocation(RunDir(out), bool(args.resume), tuple(argv), args.seeds is not None, bool(args.yes),
-                     not args.no_progress)
+                     not args.no_progress, DEFAULT_THRESHOLD if threshold is None else threshold,
+                     not getattr(args, "no_probe", False))
+    configs = None
+    names = getattr(args, "configs", None)
+    path = getattr(args, "configs_file", None)
+    if path is not None and names is None:
+        raise ConfigError("--configs-file defines configurations; name the ones to run with --configs A,B,...")
+    if names is not None:
+        configs = resolve_configs(names, load_configs_file(path) if path is not None else ())
     given = Given(tasks=args.tasks, seeds=args.seeds, agent=args.agent, agent_options=given_agent_options(args),
                   execution=given_values(args, EXECUTION_OPTIONS), log=False if args.no_log else None,
                   log_images=True if args.log_images else None, max_cost_usd=args.max_cost_usd,
-                  max_tokens=args.max_tokens)
+                  max_tokens=args.max_tokens, configs=configs)
     return inv, given
 
 
 @dataclass(frozen=True)
+class _Member:
+    """One configuration of the grid, checked: its name (None: the run's only, unnamed one), how
+    workers build its agent (with the provider's key taken from the environment, if it needs one)
+    and the agent's identity."""
+
+    name: str | None
+    spec: AgentSpec = field(repr=False)
+    agent_label: str
+    model: str | None
+    agent: Any = field(repr=False, compare=False)
+    """The agent built here to check the options (the start-up probe asks its server)."""
+
+    def facts(self) -> dict[str, Any]:
+        return {"name": self.name, "agent": self.agent_label, "model": self.model, "options": dict(self.spec.options)}
+
+
+@dataclass(frozen=True)
 class _Grid:
-    """The checked grid: seeds, task names (and hand-registered task objects) and the agent's identity."""
+    """The checked grid: seeds, task names (and hand-registered task objects) and its configurations."""
 
     seeds: list[int]
     tasks: list[str]
     registered: list[Any]
-    agent_label: str
-    model: str | None
+    members: list[_Member]
     manifest: dict[str, Any]
-    api_key: str | None = field(default=None, repr=False)
-    """The key the agent's LLM provider needs, taken from the environment (None: none needed or
-    the options name one); handed to the workers in their ``AgentSpec``."""
+    stamp: dict[str, Any]
+    """The task set's version stamp (:mod:`capmj.bench.stamp`)."""
+
+    @property
+    def agent_label(self) -> str:
+        return self.members[0].agent_label
+
+    @property
+    def model(self) -> str | None:
+        return self.members[0].model
 
     def facts(self) -> dict[str, Any]:
-        """What ``config.json`` records of the grid."""
-        return {"tasks": self.tasks, "seeds": self.seeds, "agent": self.agent_label, "model": self.model,
-                "versions": self.manifest["packages"], "manifest": self.manifest}
+        """What ``config.json`` records of the grid (``configurations`` only with ``--configs``)."""
+        out = {"tasks": self.tasks, "seeds": self.seeds, "agent": self.agent_label, "model": self.model,
+               "versions": self.manifest["packages"], "manifest": self.manifest, "stamp": self.stamp}
+        if self.members[0].name is not None:
+            out["configurations"] = [m.facts() for m in self.members]
+        return out
 
 
 def run_grid(args: argparse.Namespace, argv: Sequence[str]) -> int:
@@ -102,11 +148,13 @@ def run_grid(args: argparse.Namespace, argv: Sequence[str]) -> int:
     stored = _stored(inv)
     config = BenchConfig.resolve(given, stored_config(stored) if stored is not None else None)
     grid = _validate(inv, config, stored)
-    write_result_json(inv.run_dir.config, config_json(config, inv.argv, grid.facts(), stored))
     jobs, budget, total = _plan(inv.run_dir, config, grid)
-    progress = _Progress(budget, len(jobs), show=inv.show_progress)
+    if inv.probe:  # the servers of the configurations with episodes to run answer, or the run stops here
+        probe_agents(m.agent for m in grid.members if jobs.get(m.name))
+    write_result_json(inv.run_dir.config, config_json(config, inv.argv, grid.facts(), stored))
+    progress = _Progress(budget, sum(len(j) for j in jobs.values()), show=inv.show_progress)
     stats, interrupted, elapsed = _execute(inv.run_dir, config, grid, jobs, budget, progress)
-    records, summary = _write_summary(inv.run_dir, config, stats, elapsed, progress, budget)
+    records, summary = _write_summary(inv, config, grid, stats, elapsed, progress, budget)
     return _print_outcome(inv.run_dir.root, summary, records, total, elapsed, progress, budget, interrupted)
 
 
@@ -133,13 +181,44 @@ def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | 
         raise ConfigError(f"--attempts must be >= 1, got {config.agent_options['attempts']}")
     seeds = parse_seeds(config.seeds)
     tasks, registered = _resolve_tasks(config.tasks)
-    agent = make_agent(config.agent, **config.agent_options)  # validates name and options; workers build their own
-    _confirm_llm_grid(inv, config.agent, len(tasks) * len(seeds))
-    agent_label, model = getattr(agent, "name", config.agent), getattr(agent, "model", None)
-    config.run_budget.check_price(agent)
-    manifest = run_manifest(agent, tasks, stored)
+    agents, members = [], []
+    for name, spec in config.agent_specs():
+        try:  # validates name and options; workers build their own
+            agent = make_agent(config.agent, **spec.options)
+        except ConfigError as exc:
+            if name is None:
+                raise
+            raise ConfigError(f"configuration {name!r}: {exc}") from None
+        config.run_budget.check_price(agent)
+        agents.append(agent)
+        members.append(_Member(name, replace(spec, api_key=_environment_key(agent)), getattr(agent, "name", config.agent),
+                               getattr(agent, "model", None), agent))
+    _confirm_llm_grid(inv, config.agent, len(members) * len(tasks) * len(seeds))
+    manifest = run_manifest(agents[0], tasks, stored)
+    stamp = run_stamp(agents[0], tasks, stored)
     prepare_out(inv.run_dir.root)
-    return _Grid(seeds, tasks, registered, agent_label, model, manifest, _environment_key(agent))
+    return _Grid(seeds, tasks, registered, members, manifest, stamp)
+
+
+def run_stamp(agent: Any, tasks: Sequence[str], stored: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The task set's stamp as this agent runs it (its prompt folder); on a resume, warns (stderr)
+    about the tasks whose stamp changed since."""
+    from capmj.agents.factory import agent_setting
+    from capmj.resources import prompts_dir
+
+    folder = agent_setting(agent, "prompts_dir")
+    stamp = task_set_stamp({t: registry.get_task(t) for t in tasks}, Path(folder) if folder else prompts_dir())
+    if stored and stored.get("stamp"):
+        for problem in mismatches({"stored run": stored["stamp"], "this resume": stamp}, tasks):
+            print(f"capmj-bench: warning: resuming with another task version: {problem}", file=sys.stderr)
+    return stamp
+
+
+def _in_order(records: list[EpisodeRecord], order: Sequence[str]) -> list[EpisodeRecord]:
+    """Records with those of the configurations in ``order`` first, in that order (the profile's
+    first configuration is its baseline), the others after them as they come."""
+    rank = {name: i for i, name in enumerate(order)}
+    return sorted(records, key=lambda r: rank.get(r.config, len(rank)) if r.config is not None else len(rank))
 
 
 def _environment_key(agent: Any) -> str | None:
@@ -179,24 +258,29 @@ def _confirm_llm_grid(inv: Invocation, agent: str, n: int) -> None:
     raise ConfigError(f"{what}; give --seeds explicitly (e.g. --seeds 10001:10011:2) or add --yes")
 
 
-def _plan(run: RunDir, config: BenchConfig, g: _Grid) -> tuple[list[Job], BudgetTracker, int]:
-    """The episodes not yet in episodes.jsonl, the run budget's tracker (counting what is there),
-    and the grid's size; prints the plan to stderr."""
+def _plan(run: RunDir, config: BenchConfig, g: _Grid) -> tuple[dict[str | None, list[Job]], BudgetTracker, int]:
+    """The episodes not yet in episodes.jsonl, per configuration (in grid order), the run budget's
+    tracker (counting what is there), and the grid's size; prints the plan to stderr."""
     existing, bad = read_records(run.episodes)
-    done = {r.key for r in existing}
+    done = {r.grid_key for r in existing}
     budget = BudgetTracker(config.run_budget, existing)
-    jobs = []
-    for t in g.tasks:
-        for seed in g.seeds:
-            if (t, seed, g.agent_label, g.model) in done:
-                continue
-            rrd = str(run.rrd(t, seed, g.agent_label, g.model)) if config.log else None
-            jobs.append(Job(t, seed, rrd, thumb=str(run.thumb(t, seed, g.agent_label, g.model))))
-    total = len(g.tasks) * len(g.seeds)
+    jobs: dict[str | None, list[Job]] = {}
+    for m in g.members:
+        todo = jobs.setdefault(m.name, [])
+        for t in g.tasks:
+            for seed in g.seeds:
+                if (m.name, t, seed, m.agent_label, m.model) in done:
+                    continue
+                rrd = str(run.rrd(t, seed, m.agent_label, m.model, m.name)) if config.log else None
+                todo.append(Job(t, seed, rrd, thumb=str(run.thumb(t, seed, m.agent_label, m.model, m.name))))
+    total = len(g.members) * len(g.tasks) * len(g.seeds)
+    n_jobs = sum(len(j) for j in jobs.values())
     e = config.execution
-    print(f"capmj-bench: {len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "
-          f"{g.agent_label}" + (f" ({g.model})" if g.model else "") + f"; {total - len(jobs)} already done, "
-          f"{len(jobs)} to run on {e.workers} worker(s) × {e.concurrency} in flight; results in {run.root}"
+    named = [m.name for m in g.members if m.name is not None]
+    print("capmj-bench: " + (f"{len(named)} configuration(s) ({', '.join(named)}) × " if named else "")
+          + f"{len(g.tasks)} task(s) × {len(g.seeds)} seed(s) = {total} episode(s) with agent "
+          f"{g.agent_label}" + (f" ({g.model})" if g.model else "") + f"; {total - n_jobs} already done, "
+          f"{n_jobs} to run on {e.workers} worker(s) × {e.concurrency} in flight; results in {run.root}"
           + (f" (skipped {bad} truncated line(s))" if bad else ""),
           file=sys.stderr)
     return jobs, budget, total
@@ -230,19 +314,22 @@ class _Progress:
             self.bar.close()
 
 
-def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: list[Job], budget: BudgetTracker,
-             progress: _Progress) -> tuple[GridStats | None, int | None, float]:
-    """Run the jobs, appending each result to episodes.jsonl as it comes; Ctrl-C, SIGTERM and
-    SIGHUP stop the workers and keep what finished.  Returns (stats or None when stopped, the
-    stopping signal or None, wall seconds)."""
+def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: Mapping[str | None, list[Job]],
+             budget: BudgetTracker, progress: _Progress) -> tuple[GridStats | None, int | None, float]:
+    """Run the jobs, one configuration after another, appending each result to episodes.jsonl as
+    it comes; Ctrl-C, SIGTERM and SIGHUP stop the workers and keep what finished.  Returns (stats
+    or None when stopped, the stopping signal or None, wall seconds)."""
     interrupted: int | None = None
-    stats: GridStats | None
+    stats: GridStats | None = None
     t0 = time.perf_counter()
     with ResultsWriter(run.episodes) as writer, _stop_on_signals():
         try:
-            spec = replace(config.agent_spec, api_key=g.api_key)
-            stats = run_jobs_to_file(jobs, spec, config.execution, run_dir=run, writer=writer,
-                                     progress=progress, registered=g.registered, stop=budget.stop)
+            for m in g.members:
+                if budget.stop():
+                    break
+                part = run_jobs_to_file(jobs.get(m.name, []), m.spec, config.execution, run_dir=run, writer=writer,
+                                        progress=progress, registered=g.registered, stop=budget.stop, config=m.name)
+                stats = part if stats is None else _add(stats, part)
         except KeyboardInterrupt as exc:
             interrupted = getattr(exc, "signum", signal.SIGINT)
             stats = None
@@ -252,12 +339,26 @@ def _execute(run: RunDir, config: BenchConfig, g: _Grid, jobs: list[Job], budget
     return stats, interrupted, time.perf_counter() - t0
 
 
-def _write_summary(run: RunDir, config: BenchConfig, stats: GridStats | None, elapsed: float, progress: _Progress,
-                   budget: BudgetTracker) -> tuple[list[EpisodeRecord], dict[str, Any]]:
+def _add(a: GridStats, b: GridStats) -> GridStats:
+    """The counts of two parts of a grid (two configurations) together."""
+    return replace(a, done=a.done + b.done, successes=a.successes + b.successes, crashes=a.crashes + b.crashes,
+                   retried=a.retried + b.retried, episode_wall_s=a.episode_wall_s + b.episode_wall_s,
+                   wall_s=a.wall_s + b.wall_s)
+
+
+def _write_summary(inv: Invocation, config: BenchConfig, g: _Grid, stats: GridStats | None, elapsed: float,
+                   progress: _Progress, budget: BudgetTracker) -> tuple[list[EpisodeRecord], dict[str, Any]]:
     """summary.json/md/png over every episode in the folder (earlier runs' included), with this
-    run's own figures under "run"; returns the records and the summary."""
+    run's own figures under "run", the task stamp and each configuration's options; returns the
+    records and the summary."""
+    run = inv.run_dir
     records, _ = read_records(run.episodes)
-    summary = summarize(records)
+    order = [m.name for m in g.members if m.name is not None]
+    summary = summarize(_in_order(records, order), anomaly_threshold=inv.anomaly_threshold)
+    summary["stamp"] = g.stamp
+    for m in g.members:
+        if m.name is not None and m.name in summary["configs"]:
+            summary["configs"][m.name]["options"] = dict(m.spec.options)
     summary["run"] = {"elapsed_s": elapsed, "episodes_run": progress.n, "workers": config.execution.workers,
                       "crashes": getattr(stats, "crashes", 0), "retried_after_crash": getattr(stats, "retried", 0),
                       "stopped_by_budget": budget.reason}
@@ -268,9 +369,15 @@ def _write_summary(run: RunDir, config: BenchConfig, stats: GridStats | None, el
 def _print_outcome(out: Path, summary: dict[str, Any], records: list[EpisodeRecord], total: int, elapsed: float,
                    progress: _Progress, budget: BudgetTracker, interrupted: int | None) -> int:
     """Success per configuration on stdout, how to continue a stopped run on stderr; the exit code."""
+    warning = headline(summary.get("anomalies") or {})
+    if warning:
+        print(warning)
     for label, st in summary["overall"].items():
-        print(f"{label}: {pct_cell(st)}  ({st['successes']}/{st['n']} episodes, mean progress "
+        print(f"{label}: {pct_cell(st)}  ({st['denominator']}, mean progress "
               f"{st['mean_progress'] or 0:.2f}, {st['errors']} with errors)")
+    stamp = summary.get("stamp") or {}
+    if stamp:
+        print(f"task stamp {short(stamp.get('overall'))} ({len(stamp.get('tasks') or {})} tasks)")
     print(f"ran {progress.n} episode(s) in {elapsed:.1f} s; wrote {out / EPISODES}, {out / 'summary.md'}")
     if interrupted is not None:
         print(f"capmj-bench: interrupted by {signal.Signals(interrupted).name}; continue with: "

@@ -30,9 +30,11 @@ def safe_name(s: str) -> str:
     return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in str(s))
 
 
-def episode_stem(task: str, seed: int, agent: str, model: str | None) -> str:
-    """``<task>/<seed>-<agent>[-<model>]``: an episode's file name below ``rrd/`` and ``transcripts/``."""
-    return f"{safe_name(task)}/{seed}-{agent}" + (f"-{safe_name(model)}" if model else "")
+def episode_stem(task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> str:
+    """``[<config>/]<task>/<seed>-<agent>[-<model>]``: an episode's file name below ``rrd/`` and
+    ``transcripts/`` (``config``: the configuration of a ``--configs`` grid)."""
+    head = f"{safe_name(config)}/" if config else ""
+    return f"{head}{safe_name(task)}/{seed}-{agent}" + (f"-{safe_name(model)}" if model else "")
 
 
 @dataclass(frozen=True)
@@ -69,28 +71,28 @@ class RunDir:
         return RunDir(self.root.resolve())
 
     @staticmethod
-    def rrd_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
-        """``rrd/<task>/<seed>-<agent>[-<model>].rrd``, relative to the folder (what records hold)."""
-        return f"{RRD_DIR}/{episode_stem(task, seed, agent, model)}.rrd"
+    def rrd_relpath(task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> str:
+        """``rrd/[<config>/]<task>/<seed>-<agent>[-<model>].rrd``, relative to the folder (what records hold)."""
+        return f"{RRD_DIR}/{episode_stem(task, seed, agent, model, config)}.rrd"
 
     @staticmethod
-    def transcript_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
-        """``transcripts/<task>/<seed>-<agent>[-<model>].jsonl``, relative to the folder."""
-        return f"{TRANSCRIPTS_DIR}/{episode_stem(task, seed, agent, model)}.jsonl"
+    def transcript_relpath(task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> str:
+        """``transcripts/[<config>/]<task>/<seed>-<agent>[-<model>].jsonl``, relative to the folder."""
+        return f"{TRANSCRIPTS_DIR}/{episode_stem(task, seed, agent, model, config)}.jsonl"
 
     @staticmethod
-    def thumb_relpath(task: str, seed: int, agent: str, model: str | None) -> str:
-        """``thumbs/<task>/<seed>-<agent>[-<model>].png``: a failed episode's final top-down view
+    def thumb_relpath(task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> str:
+        """``thumbs/[<config>/]<task>/<seed>-<agent>[-<model>].png``: a failed episode's final top-down view
         (:mod:`capmj.bench.thumbnail`), relative to the folder."""
-        return f"{THUMBS_DIR}/{episode_stem(task, seed, agent, model)}.png"
+        return f"{THUMBS_DIR}/{episode_stem(task, seed, agent, model, config)}.png"
 
-    def thumb(self, task: str, seed: int, agent: str, model: str | None) -> Path:
+    def thumb(self, task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> Path:
         """The absolute path of an episode's thumbnail (written for failed episodes only)."""
-        return (self.root / self.thumb_relpath(task, seed, agent, model)).resolve()
+        return (self.root / self.thumb_relpath(task, seed, agent, model, config)).resolve()
 
-    def rrd(self, task: str, seed: int, agent: str, model: str | None) -> Path:
+    def rrd(self, task: str, seed: int, agent: str, model: str | None, config: str | None = None) -> Path:
         """The absolute path of an episode's ``.rrd`` log."""
-        return (self.root / self.rrd_relpath(task, seed, agent, model)).resolve()
+        return (self.root / self.rrd_relpath(task, seed, agent, model, config)).resolve()
 
     def path(self, rel: str) -> Path:
         """A path a record holds (relative to the folder, or absolute from an older run) as a path."""

@@ -12,7 +12,7 @@ from typing import Any, Callable, Mapping
 from capmj.bench.failures import LABELS
 from capmj.bench.spend import fmt_cost
 
-__all__ = ["comparison_section", "cost_section", "failure_section", "perception_section", "warnings_section"]
+__all__ = ["anomaly_section", "profile_section", "stamp_lines", "comparison_section", "cost_section", "failure_section", "perception_section", "warnings_section"]
 
 
 def _rows(summary: Mapping[str, Any], task_label: Callable[[str], str],
@@ -126,3 +126,48 @@ def warnings_section(warnings: list[str]) -> list[str]:
     return ["", "## Warnings: the combined runs differ", "",
             "These runs were not made under the same conditions (run manifests in config.json):", ""] + \
            [f"- {w}" for w in warnings]
+
+
+def stamp_lines(stamp: Mapping[str, Any] | None) -> list[str]:
+    """The task-set stamp line(s) under the title (:mod:`capmj.bench.stamp`); a ``report`` over
+    several runs lists each run's overall stamp."""
+    from capmj.bench.stamp import short
+
+    if not stamp:
+        return []
+    if "overall" in stamp:
+        return [f"Task stamp: `{short(stamp['overall'])}` ({len(stamp.get('tasks') or {})} tasks, capmj "
+                f"{stamp.get('capmj')}, MJCF `{short(stamp.get('mjcf'))}`, prompts `{short(stamp.get('prompts'))}`)", ""]
+    return ["Task stamps: " + ", ".join(f"{src} `{short((s or {}).get('overall'))}`" for src, s in stamp.items()), ""]
+
+
+def profile_section(prof: Mapping[str, Any] | None) -> list[str]:
+    """The capability profile's efficiency table (the configuration × task success table is the
+    success table above; the paired comparisons follow)."""
+    from capmj.bench.profile import efficiency_rows
+
+    if not prof or not prof.get("configs"):
+        return []
+    return ["", "## Capability profile: efficiency", "",
+            "Over the agent's episodes (anomalies excluded); *per solved* = the configuration's total over its "
+            "episodes divided by the episodes it solved (— when it solved none); $ is unknown (—) when any "
+            "episode's price is. Turns = attempt records (multi-turn turns, else plan attempts).", ""] + \
+        efficiency_rows(prof)
+
+
+def anomaly_section(anomalies: Mapping[str, Any] | None, task_label: Callable[[str], str]) -> list[str]:
+    """Every anomaly (harness failure, not the agent's; :mod:`capmj.bench.anomalies`), listed."""
+    if not anomalies:
+        return []
+    head = ["", "## Anomalies (harness failures, excluded from every rate)", "",
+            f"{anomalies['count']} of {anomalies['episodes']} episodes ({100 * anomalies['share']:.0f} %; "
+            f"threshold {100 * anomalies['threshold']:.0f} %)"
+            + (": " + ", ".join(f"{k} {v}" for k, v in anomalies["labels"].items()) if anomalies["labels"] else "")
+            + "."]
+    if not anomalies["list"]:
+        return head
+    rows = ["", "| Configuration | Task | Seed | Label | Error |", "|---|---|---:|---|---|"]
+    for a in anomalies["list"]:
+        err = " ".join(str(a.get("error") or "").split()).replace("|", "\\|")
+        rows.append(f"| {a['config']} | {task_label(a['task'])} | {a['seed']} | {a['label']} | {err[:160]} |")
+    return head + rows

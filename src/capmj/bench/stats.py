@@ -10,6 +10,7 @@ seeds, often a handful of discordant pairs) where the chi-squared approximation 
 
 from __future__ import annotations
 
+import math
 from math import comb
 from typing import Any, Callable, Sequence, TypeVar
 
@@ -17,7 +18,7 @@ from capmj.records import Episode
 
 R = TypeVar("R", bound=Episode)
 
-__all__ = ["ALPHA", "mcnemar_exact", "paired_comparison"]
+__all__ = ["ALPHA", "mcnemar_exact", "paired_comparison", "wilson"]
 
 ALPHA = 0.05
 """Differences with p >= ALPHA are flagged as not significant."""
@@ -65,3 +66,14 @@ def paired_comparison(records: Sequence[R], label_of: Callable[[R], str], a: str
     every = [(outcome[a][k], outcome[b][k]) for k in common]
     return {"a": a, "b": b, "alpha": ALPHA, "unpaired": unpaired,
             "tasks": {t: _cell(p) for t, p in sorted(by_task.items())}, "overall": _cell(every)}
+
+
+def wilson(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """The Wilson score interval of a binomial proportion (95 % by default); (0, 1) when n = 0."""
+    if n <= 0:
+        return 0.0, 1.0
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)

@@ -21,12 +21,13 @@ from capmj.records import Episode, EpisodeRecord
 __all__ = ["read_calls", "write_calls"]
 
 
-def write_calls(out_dir: str | Path, result: Episode) -> str | None:
+def write_calls(out_dir: str | Path, result: Episode, config: str | None = None) -> str | None:
     """Write ``result.calls`` into the episode's transcript file; its path relative to ``out_dir``
-    (what the record's ``transcript`` holds), None for an episode without LLM calls."""
+    (what the record's ``transcript`` holds), None for an episode without LLM calls.  ``config``
+    names the configuration of a ``--configs`` grid (a folder of its own)."""
     if not result.calls:
         return None
-    rel = RunDir.transcript_relpath(result.task, result.seed, result.agent, result.model)
+    rel = RunDir.transcript_relpath(result.task, result.seed, result.agent, result.model, config)
     path = RunDir(Path(out_dir)).path(rel)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path, encoding="utf-8") as f:
