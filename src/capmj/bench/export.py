@@ -1,4 +1,5 @@
-"""``python -m capmj.bench export DIR --format chat-jsonl``: LLM calls of a run as fine-tuning data.
+"""``python -m capmj.bench export DIR --format chat-jsonl``: LLM calls of a run as fine-tuning data;
+``export DIR --bundle OUT.zip``: the run's evidence bundle (:mod:`capmj.bench.bundle`).
 
 One JSON line per planner / helper LMP / reporter call that returned a completion, in the OpenAI
 chat fine-tuning format: ``messages`` = the messages sent plus the completion as the final
@@ -55,16 +56,35 @@ def chat_examples(run_dir: str | Path, *, only_success: bool = False,
             yield example
 
 
+def _bundle(run_dir: Path, out: Path, with_rrd: bool) -> int:
+    from capmj.bench.bundle import write_bundle
+
+    try:
+        path = write_bundle(run_dir, out, with_rrd=with_rrd)
+    except (ConfigError, OSError) as exc:
+        print(f"capmj-bench export: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)", file=sys.stderr)
+    return 0
+
+
 def main(argv: Sequence[str]) -> int:
     p = argparse.ArgumentParser(prog="python -m capmj.bench export",
                                 description="Write every LLM call of a run as a chat transcript (OpenAI fine-tuning "
-                                            "JSONL) with its episode's verdict and failure label.")
+                                            "JSONL) with its episode's verdict and failure label; or, with --bundle, "
+                                            "the run's evidence as one zip file.")
     p.add_argument("dir", type=Path, metavar="DIR")
+    p.add_argument("--bundle", type=Path, default=None, metavar="OUT.zip",
+                   help="write the run's evidence bundle instead: summary, manifest, episodes, transcripts, the "
+                        "report page, versions, evidence.json and the command that reproduces it (docs/bench.md)")
+    p.add_argument("--with-rrd", action="store_true", help="with --bundle: also the episodes' .rrd logs")
     p.add_argument("--format", default="chat-jsonl", choices=FORMATS)
     p.add_argument("--only-success", action="store_true", help="only calls of successful episodes")
     p.add_argument("--messages-only", action="store_true", help="lines carry 'messages' only (no metadata)")
     p.add_argument("--out", type=Path, default=None, metavar="FILE", help="output file (default: stdout)")
     args = p.parse_args(list(argv))
+    if args.bundle is not None:
+        return _bundle(args.dir, args.bundle, args.with_rrd)
     n = 0
     try:
         examples = chat_examples(args.dir, only_success=args.only_success, messages_only=args.messages_only)
