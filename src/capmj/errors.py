@@ -200,7 +200,7 @@ class MotionPlanningError(MotionFailed):
     (or the target itself is inside something).  Raised before the arm moves; ``status`` is
     ``no_path``.  Failure attribution labels it ``motion``."""
 
-    shown_as = None
+    shown_as: ClassVar[str | None] = None
 
 
 class UnreachablePose(MotionFailed):

@@ -35,6 +35,10 @@ CHECK_STEP = 0.01
 """rad: the largest change of any joint between two configurations checked along a path (about
 8 mm at the tool for the base joint at full reach: less than a block's half edge)."""
 
+TOUCH_TOL = 0.001
+"""m: how deep a near contact of the tool may be under :attr:`Allowance.tool_near` (MuJoCo's contact
+distance of two resting faces is a fraction of a millimetre)."""
+
 TABLE = 0
 """The owner id of the table (the floor plane) in an :class:`Allowance`."""
 
@@ -51,9 +55,14 @@ class Allowance:
 
     pairs: frozenset[tuple[int, int]] = frozenset()
     tool_may_touch: frozenset[int] = frozenset()
+    tool_near: bool = False
+    """The cup and the carried object may come within ``clearance`` of anything (touching no more
+    than :data:`TOUCH_TOL` deep): a guarded descent, whose end is a precise placement next to
+    its neighbours."""
 
     def __or__(self, other: "Allowance") -> "Allowance":
-        return Allowance(self.pairs | other.pairs, self.tool_may_touch | other.tool_may_touch)
+        return Allowance(self.pairs | other.pairs, self.tool_may_touch | other.tool_may_touch,
+                         self.tool_near or other.tool_near)
 
 
 @dataclass(frozen=True)
@@ -186,9 +195,6 @@ class CollisionChecker:
         """The owner id of a static geom: its object id, or :data:`TABLE`."""
         return int(self.world.geom_obj[static_geom])
 
-    def _tool_geom(self, g: int) -> bool:
-        return bool(self._tool[g])
-
     # ------------------------------------------------------------------ queries
     def collision(self, q: np.ndarray, allow: Allowance = Allowance()) -> Collision | None:
         """The closest contact at joints ``q`` that ``allow`` does not cover, or None if clear."""
@@ -196,7 +202,8 @@ class CollisionChecker:
         for g1, g2, dist in self.contacts(q):
             if (g1, g2) in allow.pairs:
                 continue
-            if self._tool_geom(g1) and self.owner(g2) in allow.tool_may_touch:
+            if self._tool[g1] and (self.owner(g2) in allow.tool_may_touch
+                                   or (allow.tool_near and dist > -TOUCH_TOL)):
                 continue
             if worst is None or dist < worst.dist:
                 part = f"the carried {self._names[g1][4:]}" if self._tool[g1] and g1 != self.world.cup_geom \
@@ -220,7 +227,7 @@ class CollisionChecker:
 
     def tool_owners(self, q: np.ndarray) -> frozenset[int]:
         """Owner ids the cup or the carried object is within ``clearance`` of at joints ``q``."""
-        return frozenset(self.owner(g2) for g1, g2, _ in self.contacts(q) if self._tool_geom(g1))
+        return frozenset(self.owner(g2) for g1, g2, _ in self.contacts(q) if self._tool[g1])
 
     def path_collision(self, qs: np.ndarray, allow: Allowance = Allowance()) -> tuple[int, Collision] | None:
         """The first collision along the joint path through the rows of ``qs`` (straight in joint

@@ -326,7 +326,8 @@ class Motion:
         What may touch: the pairs touching where the move starts (first leg only), and for a
         ``guarded`` move (one that stops at contact) on its last leg the cup and the carried
         object may touch what they touch where that leg ends (the object being picked, the
-        surface being placed on) and the table; that last leg is never replaced (its end is the
+        surface being placed on) and the table, and pass anything else closer than the clearance
+        (a placement next to its neighbours) without pressing into it; that last leg is never replaced (its end is the
         contact the move is for).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg
         is not clear and cannot be replaced.  Records each leg in :attr:`paths`.  With
         ``plan_collisions`` off the legs are returned unchecked (and recorded).
@@ -355,7 +356,7 @@ class Motion:
             allow = start if i == 0 else Allowance()
             last_guarded = guarded and i == len(plans) - 1
             if last_guarded:
-                allow = allow | Allowance(tool_may_touch=chk.tool_owners(plan.qs[-1]) | {TABLE})
+                allow = allow | Allowance(tool_may_touch=chk.tool_owners(plan.qs[-1]) | {TABLE}, tool_near=True)
             hit = chk.path_collision(plan.qs, allow)
             if hit is None:
                 out.append(plan)

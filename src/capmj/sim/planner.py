@@ -28,7 +28,7 @@ import numpy as np
 MAX_CHECKS = 30000
 """Configuration checks one query may spend before it gives up (a few tenths of a second)."""
 
-WALL_GUARD_S = 10.0
+WALL_GUARD_S = 2.0
 """Seconds after which a query stops whatever its check count (a guard against a runaway; never
 reached by a query within ``MAX_CHECKS``)."""
 
@@ -64,6 +64,8 @@ def plan_joint_path(valid: Callable[[np.ndarray], bool], edge_clear: Callable[[n
     result densely (a path it rejects is not returned).  ``lo``/``hi`` are the joint limits,
     ``resolution`` (rad) the largest joint step between configurations OMPL checks on an edge,
     ``seed`` the query's seed (:func:`query_seed`)."""
+    if not valid(q_start) or not valid(q_goal):
+        return None  # RRT-Connect would wait for a valid goal until its budget ends
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou

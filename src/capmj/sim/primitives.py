@@ -175,11 +175,10 @@ class Primitives:
         if isinstance(gripped, _Failure):
             return result(gripped.status, gripped.obj, gripped.message)
         obj, yaw = gripped
-        carry = self._plan_carry(obj, yaw, place, place_yaw)
-        place_z = self._carry(obj, carry, pick, place_t)
-        if isinstance(place_z, _Failure):
-            return result(place_z.status, place_z.obj, place_z.message)
-        self._release_and_retreat(place_z, carry.new_yaw)
+        carried = self._carry(obj, yaw, place, place_yaw, pick, place_t)
+        if isinstance(carried, _Failure):
+            return result(carried.status, carried.obj, carried.message)
+        self._release_and_retreat(*carried)
         return result("ok", obj)
 
     def _grip(self, pick: np.ndarray, pick_t: tuple[float, float, float]) -> _Failure | tuple[int, float]:
@@ -232,16 +231,18 @@ class Primitives:
         return _Carry(tip=tip, hang=hang, transit=transit, yaw=yaw, new_yaw=yaw + delta, offset=offset,
                       tip_xy=tip_xy, down=down)
 
-    def _carry(self, obj: int, carry: _Carry, pick: np.ndarray, place_t: tuple[float, float, float]
-               ) -> _Failure | float:
+    def _carry(self, obj: int, yaw: float, place: np.ndarray, place_yaw: float | None, pick: np.ndarray,
+               place_t: tuple[float, float, float]) -> _Failure | tuple[float, float]:
         """Step 3: lift, carry and go down until the carried object touches (one move, corners
         rounded; on a slope where the lift straight up is out of reach); the tip height over the
         place point, where the retreat rises back to, or why not (the object then put back)."""
+        carry = self._plan_carry(obj, yaw, place, place_yaw)
         try:
-            return self._carry_moves(obj, carry, pick, place_t)
+            place_z = self._carry_moves(obj, carry, pick, place_t)
         except MotionPlanningError as exc:
-            self._let_go_here(carry.yaw)
+            self._let_go_here(yaw)
             return _Failure("no_path", obj, f"place at {place_t[:2]}: {exc}; object put back")
+        return place_z if isinstance(place_z, _Failure) else (place_z, carry.new_yaw)
 
     def _let_go_here(self, yaw: float) -> None:
         """After a carry found no path (nothing moved since the grip): let go where the object was
