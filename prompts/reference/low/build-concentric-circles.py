@@ -10,7 +10,7 @@
 # until it touches what is below and lets go.  Blocks look the same every quarter turn.
 
 
-def info(name):
+def obj(name):
     return get_object(name)
 
 
@@ -20,7 +20,7 @@ def quarter(angle):
 
 
 def pick(name):
-    o = info(name)
+    o = obj(name)
     x, y, _ = o['position']
     top = o['bbox'][5]
     _, tool_yaw = get_ee_pose()
@@ -44,7 +44,7 @@ def surface_under(x, y, reach, skip):
 
 def place(name, x, y, yaw=None):
     # the held object `name` centred over (x, y), turned to `yaw` (None: as it is), lowered onto what is there
-    o = info(name)
+    o = obj(name)
     tip, tool_yaw = get_ee_pose()
     turn = 0.0 if yaw is None else quarter(yaw - o['yaw'])
     dx, dy = o['position'][0] - tip[0], o['position'][1] - tip[1]  # the object's centre from the tip
@@ -64,7 +64,7 @@ def put(name, x, y, yaw=None):
 
 def put_on(name, target):
     # on a block or a zone: centred, turned like it; into a bowl (or onto anything else): centred, as it is
-    t = info(target)
+    t = obj(target)
     pick(name)
     place(name, t['position'][0], t['position'][1], t['yaw'] if t['kind'] in ('block', 'zone') else None)
 
@@ -95,7 +95,7 @@ def free_spot(area, r=0.045, taken=()):
 words = goal.rstrip('.').split()
 at = words.index('using')
 groups = sorted([(int(words[at + 1]), words[at + 2]), (int(words[at + 4]), words[at + 5])])
-zone = info([name for name in objects if ' zone ' in name][0])
+zone = obj([name for name in objects if ' zone ' in name][0])
 cx, cy, _ = zone['position']
 phase = zone['yaw']
 
@@ -107,8 +107,8 @@ def ring_radius(count, size):
 
 inner_edge = 0.0
 for count, color in groups:
-    blocks = [name for name in objects if ' block ' in name and info(name)['color'] == color]
-    size = 2 * info(blocks[0])['half_size'][2]
+    blocks = [name for name in objects if ' block ' in name and obj(name)['color'] == color]
+    size = 2 * obj(blocks[0])['half_size'][2]
     if inner_edge == 0.0:
         radius = max(1.5 * size, ring_radius(len(blocks), size))
     else:

@@ -9,7 +9,7 @@
 # until it touches what is below and lets go.  Blocks look the same every quarter turn.
 
 
-def info(name):
+def obj(name):
     return get_object(name)
 
 
@@ -19,7 +19,7 @@ def quarter(angle):
 
 
 def pick(name):
-    o = info(name)
+    o = obj(name)
     x, y, _ = o['position']
     top = o['bbox'][5]
     _, tool_yaw = get_ee_pose()
@@ -43,7 +43,7 @@ def surface_under(x, y, reach, skip):
 
 def place(name, x, y, yaw=None):
     # the held object `name` centred over (x, y), turned to `yaw` (None: as it is), lowered onto what is there
-    o = info(name)
+    o = obj(name)
     tip, tool_yaw = get_ee_pose()
     turn = 0.0 if yaw is None else quarter(yaw - o['yaw'])
     dx, dy = o['position'][0] - tip[0], o['position'][1] - tip[1]  # the object's centre from the tip
@@ -63,7 +63,7 @@ def put(name, x, y, yaw=None):
 
 def put_on(name, target):
     # on a block or a zone: centred, turned like it; into a bowl (or onto anything else): centred, as it is
-    t = info(target)
+    t = obj(target)
     pick(name)
     place(name, t['position'][0], t['position'][1], t['yaw'] if t['kind'] in ('block', 'zone') else None)
 
@@ -93,11 +93,11 @@ def free_spot(area, r=0.045, taken=()):
 # --- the plan ----------------------------------------------------------------------------------
 words = goal.rstrip('.').split()
 c1, c2 = words[words.index('alternating') + 1], words[words.index('alternating') + 3]
-zone = info([name for name in objects if ' zone ' in name][0])
-first = [name for name in objects if ' block ' in name and info(name)['color'] == c1]
-second = [name for name in objects if ' block ' in name and info(name)['color'] == c2]
+zone = obj([name for name in objects if ' zone ' in name][0])
+first = [name for name in objects if ' block ' in name and obj(name)['color'] == c1]
+second = [name for name in objects if ' block ' in name and obj(name)['color'] == c2]
 n = len(first) + len(second)
-size = 2 * info(first[0])['half_size'][2]
+size = 2 * obj(first[0])['half_size'][2]
 a = math.pi / n
 radius = max(size, (size * (math.cos(a) + math.sin(a)) + 0.01) / (2 * math.sin(a)))
 cx, cy, _ = zone['position']

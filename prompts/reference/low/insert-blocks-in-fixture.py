@@ -12,7 +12,7 @@
 # until it touches what is below and lets go.  Blocks look the same every quarter turn.
 
 
-def info(name):
+def obj(name):
     return get_object(name)
 
 
@@ -22,7 +22,7 @@ def quarter(angle):
 
 
 def pick(name):
-    o = info(name)
+    o = obj(name)
     x, y, _ = o['position']
     top = o['bbox'][5]
     _, tool_yaw = get_ee_pose()
@@ -46,7 +46,7 @@ def surface_under(x, y, reach, skip):
 
 def place(name, x, y, yaw=None):
     # the held object `name` centred over (x, y), turned to `yaw` (None: as it is), lowered onto what is there
-    o = info(name)
+    o = obj(name)
     tip, tool_yaw = get_ee_pose()
     turn = 0.0 if yaw is None else quarter(yaw - o['yaw'])
     dx, dy = o['position'][0] - tip[0], o['position'][1] - tip[1]  # the object's centre from the tip
@@ -66,7 +66,7 @@ def put(name, x, y, yaw=None):
 
 def put_on(name, target):
     # on a block or a zone: centred, turned like it; into a bowl (or onto anything else): centred, as it is
-    t = info(target)
+    t = obj(target)
     pick(name)
     place(name, t['position'][0], t['position'][1], t['yaw'] if t['kind'] in ('block', 'zone') else None)
 
@@ -95,13 +95,13 @@ def free_spot(area, r=0.045, taken=()):
 
 # --- the plan ----------------------------------------------------------------------------------
 fixtures = [name for name in objects if ' fixture ' in name]
-blocks = sorted([name for name in objects if ' block ' in name], key=lambda b: info(b)['color'])
-a = 2 * info(blocks[0])['half_size'][2]
+blocks = sorted([name for name in objects if ' block ' in name], key=lambda b: obj(b)['color'])
+a = 2 * obj(blocks[0])['half_size'][2]
 seats = [(0.0, 0.0), (a, 0.0), (0.0, a)]
 n = len(fixtures)
 for slot in range(3):
     for f, fixture in enumerate(fixtures):
-        fx = info(fixture)
+        fx = obj(fixture)
         x, y, _ = fx['position']
         c, s = math.cos(fx['yaw']), math.sin(fx['yaw'])
         u, v = seats[slot]

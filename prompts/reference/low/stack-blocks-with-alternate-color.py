@@ -8,7 +8,7 @@
 # until it touches what is below and lets go.  Blocks look the same every quarter turn.
 
 
-def info(name):
+def obj(name):
     return get_object(name)
 
 
@@ -18,7 +18,7 @@ def quarter(angle):
 
 
 def pick(name):
-    o = info(name)
+    o = obj(name)
     x, y, _ = o['position']
     top = o['bbox'][5]
     _, tool_yaw = get_ee_pose()
@@ -42,7 +42,7 @@ def surface_under(x, y, reach, skip):
 
 def place(name, x, y, yaw=None):
     # the held object `name` centred over (x, y), turned to `yaw` (None: as it is), lowered onto what is there
-    o = info(name)
+    o = obj(name)
     tip, tool_yaw = get_ee_pose()
     turn = 0.0 if yaw is None else quarter(yaw - o['yaw'])
     dx, dy = o['position'][0] - tip[0], o['position'][1] - tip[1]  # the object's centre from the tip
@@ -62,7 +62,7 @@ def put(name, x, y, yaw=None):
 
 def put_on(name, target):
     # on a block or a zone: centred, turned like it; into a bowl (or onto anything else): centred, as it is
-    t = info(target)
+    t = obj(target)
     pick(name)
     place(name, t['position'][0], t['position'][1], t['yaw'] if t['kind'] in ('block', 'zone') else None)
 
@@ -95,8 +95,8 @@ zone_color = words[words.index('zone') - 1]
 first_color = words[words.index('color') - 1]
 zone = [name for name in objects if f' {zone_color} zone ' in name][0]
 blocks = [name for name in objects if ' block ' in name]
-first = [name for name in blocks if info(name)['color'] == first_color]
-second = [name for name in blocks if info(name)['color'] != first_color]
+first = [name for name in blocks if obj(name)['color'] == first_color]
+second = [name for name in blocks if obj(name)['color'] != first_color]
 order = []
 for k in range(len(blocks)):
     group = first if k % 2 == 0 else second

@@ -184,25 +184,28 @@ class RobotDriver:
 
     # ------------------------------------------------------------------ moves
     def move_lines(self, fn: str, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None) -> None:
-        """Straight tip lines through ``points`` ((position, yaw) each), every line planned before
-        the arm moves; a new contact on the way raises :class:`CollisionDetected`."""
+        """Straight tip lines through ``points`` ((position, yaw) each), exactly as asked (never
+        planned around anything), every line planned on IK before the arm moves; a new contact
+        on the way stops the arm and raises :class:`CollisionDetected`."""
         for pos, _ in points:
             self._check_height(pos, TABLE_Z)
-        self._check_lines(points)
+        plans = self._line_plans(points, speed)
+        self._move(fn, lambda watch: self._run_lines(plans, points, watch), guarded=False)
 
-        def run(watch: ContactWatch) -> str:
-            for pos, yaw in points:
-                status = self.motion.move_to(pos, yaw, speed=speed, stop=watch.new_contact)[0]
-                if status != "ok":
-                    return status
-            return "ok"
-
-        self._move(fn, run, guarded=False)
+    def move_until_contact(self, fn: str, pos: np.ndarray, yaw: float, speed: float) -> bool:
+        """A straight tip line towards ``pos`` that stops at the tool's first contact; whether it
+        touched (False: it reached ``pos`` touching nothing)."""
+        self._check_height(pos, TABLE_Z - CONTACT_DEPTH)
+        plans = self._line_plans([(pos, yaw)], speed)
+        return self._move(fn, lambda watch: self._run_lines(plans, [(pos, yaw)], watch), guarded=True)
 
     def move_planned(self, fn: str, pos: np.ndarray, yaw: float) -> None:
-        """The tool to ``pos`` on a path clear of every object: up to the height that clears them
-        all (the carried object's hang included), across, straight down; a straight line where
-        that path is out of reach."""
+        """The tool to ``pos`` on a path clear of everything: up to the height that clears every
+        object (the carried object's hang included), across, straight down, each leg checked by
+        the sim's collision checker and planned around what is in its way
+        (:meth:`~capmj.sim.motion.Motion.move_through`); where those legs are out of reach, the
+        sim's own planned move to the pose (:meth:`~capmj.sim.motion.Motion.move_to_pose`).  No
+        clear path raises :class:`~capmj.errors.MotionPlanningError` before the arm moves."""
         self._check_height(pos, TABLE_Z)
         w = self.world
         held = w.suction.held
@@ -216,21 +219,23 @@ class RobotDriver:
             legs.append((np.array([pos[0], pos[1], transit]), yaw))
         legs.append((np.asarray(pos, float), yaw))
         try:
-            self._check_lines(legs)
+            self._line_plans(legs, None)
         except UnreachablePose:
-            legs = [(np.asarray(pos, float), yaw)]
-        self.move_lines(fn, legs)
+            legs = []
+        if not legs:
+            self.ik(pos, yaw)  # UnreachablePose when the pose itself is out of reach
 
-    def move_until_contact(self, fn: str, pos: np.ndarray, yaw: float, speed: float) -> bool:
-        """A straight tip line towards ``pos`` that stops at the tool's first contact; whether it
-        touched (False: it reached ``pos`` touching nothing)."""
-        self._check_height(pos, TABLE_Z - CONTACT_DEPTH)
-        self._check_lines([(pos, yaw)])
-        return self._move(fn, lambda watch: self.motion.move_to(pos, yaw, speed=speed, stop=watch.new_contact)[0],
-                          guarded=True)
+        def run(watch: ContactWatch) -> str:
+            m = self.motion
+            if legs:
+                return m.move_through(legs, stop=watch.new_contact)[0]
+            return m.move_to_pose(pos, yaw, stop=watch.new_contact)[0]
+
+        self._move(fn, run, guarded=False)
 
     def move_joints(self, fn: str, q: np.ndarray) -> None:
-        """A joint-space move to ``q`` (each joint at most ``joint_speed``, smooth start and stop)."""
+        """A joint-space move to ``q``: straight in joint space when that is clear, else planned
+        around what is in the way (:meth:`~capmj.sim.motion.Motion.move_joints`)."""
         ik = self.motion.ik
         bad = [i for i in range(6) if not ik.lo[i] <= q[i] <= ik.hi[i]]
         if bad:
@@ -238,22 +243,7 @@ class RobotDriver:
                                   f"{[(round(float(ik.lo[i]), 3), round(float(ik.hi[i]), 3)) for i in bad]}",
                                   status="unreachable")
         self._check_height(ik.tip_position(q), TABLE_Z)
-        cfg = self.motion.cfg
-        q0 = self.world.arm_ctrl()
-        dist = float(np.max(np.abs(q - q0)))
-        duration = max(dist / cfg.joint_speed, 2 * math.sqrt(dist / cfg.joint_accel), cfg.ik_dt)
-        n = max(2, int(math.ceil(duration / cfg.ik_dt)))
-        s = np.linspace(0.0, 1.0, n + 1)
-        s = s * s * (3 - 2 * s)
-        plan = SegmentPlan(q0 + s[:, None] * (q - q0), duration / n)
-
-        def run(watch: ContactWatch) -> str:
-            stopped, _ = self.motion.execute(plan, stop=watch.new_contact)
-            if stopped:
-                return "stopped"
-            return "stopped" if self.motion.converge(ik.tip_position(q), stop=watch.new_contact)[0] else "ok"
-
-        self._move(fn, run, guarded=False)
+        self._move(fn, lambda watch: self.motion.move_joints(q, stop=watch.new_contact)[0], guarded=False)
 
     def home(self, fn: str) -> None:
         self.move_joints(fn, np.asarray(HOME_QPOS, float))
@@ -267,21 +257,33 @@ class RobotDriver:
                                   "(move_until_contact descends onto a surface and stops there)",
                                   status="below_table")
 
-    def _check_lines(self, points: Sequence[tuple[np.ndarray, float]]) -> None:
-        """Plan every line from the commanded joints before anything moves: UnreachablePose names
-        the first waypoint the tool cannot reach in a straight line."""
+    def _line_plans(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None) -> list[SegmentPlan]:
+        """Every line planned on IK from the commanded joints before anything moves:
+        :class:`UnreachablePose` names the first waypoint the tool cannot reach in a straight line."""
         m = self.motion
         q = self.world.arm_ctrl()
         start, yaw_prev = m.ik.tip_position(q), m.commanded_yaw()
+        plans = []
         for k, (pos, yaw) in enumerate(points):
-            yaw0 = yaw + ((yaw_prev - yaw + math.pi) % (2 * math.pi) - math.pi)
-            plan = m.plan_line(start, pos, yaw0, yaw, m.cfg.speed, 0.0, q)
+            yaw0 = yaw + ((yaw_prev - yaw + math.pi) % (2 * math.pi) - math.pi)  # same angle, nearest the goal
+            plan = m.plan_line(start, pos, yaw0, yaw, speed or m.cfg.speed, 0.0, q)
             if plan is None:
                 where = f"waypoint {k} " if len(points) > 1 else ""
                 raise UnreachablePose(f"{where}{_fmt(pos)} (yaw {yaw:.3f} rad) cannot be reached in a straight line "
                                       f"from {_fmt(start)}: out of reach or beyond a joint limit on the way",
                                       status="unreachable")
+            plans.append(plan)
             start, q, yaw_prev = pos, plan.qs[-1], yaw
+        return plans
+
+    def _run_lines(self, plans: list[SegmentPlan], points: Sequence[tuple[np.ndarray, float]],
+                   watch: ContactWatch) -> str:
+        """Track the lines one after the other (each to rest), stopping at a new contact."""
+        m = self.motion
+        for plan, (pos, _) in zip(plans, points):
+            if m.execute(plan, stop=watch.new_contact)[0] or m.converge(pos, stop=watch.new_contact)[0]:
+                return "stopped"
+        return "ok"
 
     def _move(self, fn: str, run: Callable[[ContactWatch], str], guarded: bool) -> bool:
         """One budgeted, recorded move; whether it ended on the tool's contact (guarded moves)."""
