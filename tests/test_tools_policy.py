@@ -117,6 +117,7 @@ def test_calls_built_from_the_offered_schemas_run_in_order_and_reach_the_goal(se
     assert second[0]["content"] == system_prompt(8)
     assert as_record(result).failure is None
     assert LLMNotes.from_dict(llm.to_dict()) == llm
+    assert [c["id"] for c in result.calls[0]["tool_calls"]] == ids  # the call log keeps them for the transcripts
 
 
 def test_an_error_goes_back_as_the_tool_message_and_the_fix_follows(server: StubLLMServer) -> None:

@@ -52,7 +52,7 @@ from capmj.agents.lmp.meter import LLMMeter
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.prompt_files import load_prompt
 from capmj.errors import BudgetExceeded, LLMError, ToolCallingUnsupported, ToolsRejected, describe, error_facts
-from capmj.llm import LLMClient, image_part, text_part
+from capmj.llm import LLMClient, ToolCall, image_part, text_part
 from capmj.llm.provider import import_litellm, short
 from capmj.llm.records import Completion
 from capmj.records import AttemptRecord, LLMNotes, ToolCallRecord
@@ -245,7 +245,11 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
                 messages = [{"role": "system", "content": system_prompt(max_turns, o.prompts_dir)},
                             {"role": "user", "content": question(session.objects_text(), goal)}]
             before = [len(c.records) for c in clients]
+            made = len(meter.calls)
             ran = _turn(session, api, messages, tools, goal, k, o.plan_budget.max_api_calls, agent.model)
+            native = [ToolCall(c.id, c.name, c.arguments).to_message() for c in ran.calls if c.form == "tool_calls"]
+            if native and len(meter.calls) > made:  # the call log (transcripts, export) keeps the answer's calls
+                meter.calls[made]["tool_calls"] = native
             llm_error = ran.error
             predicate: tuple[bool | None, float | None] = (None, None)
             if llm_error is None:
