@@ -45,6 +45,7 @@ from capmj.agents.api.perceived import make_api
 from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
+from capmj.agents.llm_agent.levels import LevelSession
 from capmj.agents.llm_agent.planner import question
 from capmj.agents.lmp.meter import LLMMeter
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
@@ -224,7 +225,7 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
     ctx.notes["llm_transcript"] = transcript
     goal = ctx.scene.goal
     api = make_api(ctx, o.perception)  # one API for the episode: functions defined earlier log here too
-    functions = api.functions()
+    functions = api.functions(o.api)
     template = _text_template("multiturn_feedback.txt", o.prompts_dir)
     views = _Views(ctx)
     namespace: dict[str, object] = {}
@@ -237,10 +238,10 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
             if k > 1:
                 ctx.next_attempt()
             meter.attempt = k
-            session = LMPSession(complete=meter.wrap(client.complete), api=functions, objects_text=api.objects_text,
-                                 attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
-                                 lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=agent.helper_cap,
-                                 rng=episode_rng(ctx.seed, f"code{k}"))
+            session = LevelSession(complete=meter.wrap(client.complete), api=functions, objects_text=api.objects_text,
+                                   attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
+                                   lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=agent.helper_cap,
+                                   rng=episode_rng(ctx.seed, f"code{k}"), api_level=o.api, examples=o.examples)
             session.check = check(session, ctx) if check is not None else None
             if not messages:
                 q = question(session.objects_text(), goal)
