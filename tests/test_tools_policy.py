@@ -324,3 +324,46 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     assert replay_check([str(tmp_path / "run")]) == 0
     assert len(server.requests) == 0
+
+
+def test_each_turn_is_logged_with_its_calls_and_results(server: StubLLMServer) -> None:
+    from test_llm_chain import MemoryRecorder
+
+    server.respond_with(turns(lambda r: Reply.calls(("get_color", {"obj": ZONE}), ("get_color", {"obj": "nothing"})),
+                              "FINISH"))
+    rec = MemoryRecorder()
+    result = run_episode(get_task(TASK), SEED, agent(server), recorder=rec)
+    first = result.llm.attempts[0]
+    assert rec.texts["llm/attempt1/planner/1/code"] == [f'get_color({{"obj": "{ZONE}"}})\nget_color({{"obj": "nothing"}})']
+    assert rec.texts["llm/attempt1/planner/1/result"][0].startswith('get_color -> "orange"\nget_color -> error: ')
+    assert len(rec.texts["llm/attempt1/api_calls"][0].splitlines()) == 2 == first.api_calls
+    assert first.error == first.tool_calls[1].error and first.error_type == "UnknownObjectError"
+    assert rec.texts["llm/attempt2/planner/1/completion"] == ["FINISH"]
+
+
+def test_image_feedback_sends_the_views_after_the_tool_messages(server: StubLLMServer) -> None:
+    server.respond_with(turns(lambda r: Reply.calls(("get_obj_names", {})), "FINISH"))
+    result = episode(agent(server, interaction="multi", feedback="image"))
+    last = server.requests[1]["messages"][-1]
+    assert last["role"] == "user" and isinstance(last["content"], list)
+    images = [p for p in last["content"] if p.get("type") == "image_url"]
+    assert len(images) == result.llm.attempts[0].images >= 1 and result.llm.feedback == "image"
+
+
+def test_streamed_call_pieces_are_joined_by_index() -> None:
+    from types import SimpleNamespace
+
+    from capmj.llm.stream import ToolCallParts
+
+    def chunk(*deltas: dict[str, Any]) -> Any:
+        return SimpleNamespace(choices=[SimpleNamespace(delta=SimpleNamespace(content=None, tool_calls=list(deltas)))])
+
+    parts = ToolCallParts()
+    for c in (chunk({"index": 0, "id": "a", "function": {"name": "say", "arguments": ""}}),
+              chunk({"index": 1, "id": "b", "function": {"name": "get_color", "arguments": '{"ob'}}),
+              chunk({"index": 0, "function": {"arguments": '{"msg": '}}),
+              chunk({"index": 1, "function": {"arguments": 'j": 3}'}}),
+              chunk({"index": 0, "function": {"arguments": '"hi"}'}})):
+        parts.add(c)
+    assert [(t.id, t.name, json.loads(t.arguments)) for t in parts.calls()] == [
+        ("a", "say", {"msg": "hi"}), ("b", "get_color", {"obj": 3})]
