@@ -24,14 +24,15 @@ ANOMALY = "anomaly"
 SIDE: dict[str, str] = {
     "no_code": AGENT, "syntax": AGENT, "sandbox_violation": AGENT, "budget": AGENT, "unknown_object": AGENT,
     "api_misuse": AGENT, "plan_exception": AGENT, "helper_lmp": AGENT, "perception": AGENT, "motion": AGENT,
-    "physics": AGENT, "wrong_plan": AGENT, "reporter_false_positive": AGENT, "reporter_false_negative": AGENT,
+    "collision": AGENT, "physics": AGENT, "wrong_plan": AGENT, "reporter_false_positive": AGENT, "reporter_false_negative": AGENT,
     "no_finish": AGENT,
     "llm_error": ANOMALY, "infrastructure": ANOMALY,
 }
 """Each failure label: the agent's failure, or an anomaly of the harness (see the module docstring).
 
 ``budget`` is the agent's: the episode's own LLM or sandbox budget, which the agent spent;
-``perception`` and ``physics`` are the agent's configuration's (what it reads, what its plan built)."""
+``perception``, ``collision`` and ``physics`` are the agent's configuration's (what it reads, where
+its moves went, what its plan built)."""
 
 ANOMALY_LABELS: tuple[str, ...] = tuple(lab for lab in LABELS if SIDE.get(lab) == ANOMALY)
 

@@ -95,7 +95,7 @@ def _success_table(summary: Mapping[str, Any], tasks: Sequence[str], labels: Seq
 def pct_cell(st: Mapping[str, Any] | None, show_n: bool = False) -> str:
     """``"96 % [87–99]"`` (success rate and 95 % Wilson interval, rounded to whole percent)."""
     if not st or not st.get("n"):
-        return "—" if not st or not st.get("anomalies") else f"— (n=0, {st['anomalies']} anomalies excluded)"
+        return "—" if not st or not st.get("anomalies") or not show_n else f"— (n=0, {st['anomalies']} anomalies excluded)"
     lo, hi = st["ci95"]
     cell = f"{round(100 * st['success_rate'])} % [{round(100 * lo)}–{round(100 * hi)}]"
     if not show_n:
@@ -148,9 +148,10 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                 continue
             lo, hi = st["ci95"]
             name = t if t.startswith("**") else task_label(t)
-            out.append(f"| {name} | {lab} | {st['n']} | {st['successes']} | {100 * (st['success_rate'] or 0):.1f} % | "
-                       f"{100 * lo:.1f}–{100 * hi:.1f} % | {_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | "
-                       f"{st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
+            rate, ci = ((f"{100 * st['success_rate']:.1f} %", f"{100 * lo:.1f}–{100 * hi:.1f} %")
+                        if st["n"] else ("—", "—"))
+            out.append(f"| {name} | {lab} | {st['n']} | {st['successes']} | {rate} | {ci} | "
+                       f"{_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | {st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
     out += _turns_table(rows, labels)
     out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
