@@ -50,6 +50,7 @@ article.failed-episode h3{margin:.1em 0 .4em;font-size:1em}
 article.failed-episode img{width:320px;max-width:100%;height:auto;image-rendering:pixelated;border:1px solid #bbb}
 .label{display:inline-block;background:#a40;color:#fff;border-radius:3px;padding:0 .4em;font-size:.85em}
 pre{background:#f0f0f0;padding:.5em;overflow-x:auto;font-size:.8em;max-height:24em}
+pre.error{white-space:pre-wrap;word-break:break-word;background:#fbeeee}
 code.cmd{display:block;background:#222;color:#eee;padding:.4em;font-size:.8em;word-break:break-all}
 details summary{cursor:pointer}
 """

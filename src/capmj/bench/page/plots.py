@@ -6,6 +6,7 @@ the success rate as colour, ``k/n`` written in each cell) and the bars of ``summ
 from __future__ import annotations
 
 import io
+import textwrap
 import tempfile
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -35,7 +36,7 @@ def _rows(view: ProfileView, order: Callable[[str], Any]) -> list[tuple[str, Map
 
 def _svg(fig: Any, plt: Any) -> bytes:
     buf = io.BytesIO()
-    fig.savefig(buf, format="svg", metadata={"Date": None})
+    fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight")
     plt.close(fig)
     return buf.getvalue()
 
@@ -49,7 +50,7 @@ def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
     rows = _rows(view, order)
     labels: Sequence[str] = view.configs
     rates = np.full((len(rows), len(labels)), np.nan)
-    fig, ax = plt.subplots(figsize=(4.0 + 1.6 * len(labels), 1.4 + 0.4 * len(rows)))
+    fig, ax = plt.subplots(figsize=(3.0 + 1.9 * len(labels), 1.2 + 0.4 * len(rows)))
     for i, (_, per) in enumerate(rows):
         for j, lab in enumerate(labels):
             st = per[lab]
@@ -59,7 +60,8 @@ def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
     cmap = matplotlib.colormaps["RdYlGn"].with_extremes(bad="#dddddd")
     image = ax.imshow(np.ma.masked_invalid(rates), cmap=cmap, vmin=0, vmax=100, aspect="auto", zorder=0)
     ax.set_xticks(range(len(labels)))
-    ax.set_xticklabels(labels, fontsize=8, rotation=20, ha="right")
+    ax.set_xticklabels([textwrap.fill(lab, 24) for lab in labels], fontsize=8)
+    ax.xaxis.tick_top()
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels([name for name, _ in rows], fontsize=8)
     ax.axhline(len(rows) - 1.5, color="black", linewidth=1)
