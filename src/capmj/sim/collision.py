@@ -25,15 +25,20 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from capmj.sim.robot import ARM_BODIES, SUCTION_BODY
+from capmj.sim.robot import ARM_BODIES, ARM_JOINTS, SUCTION_BODY
 from capmj.sim.world import World
 
 CLEARANCE = 0.005
 """m: room kept between a moving geom and a static one where they are not meant to touch."""
 
 CHECK_STEP = 0.01
-"""rad: the largest change of any joint between two configurations checked along a path (about
-8 mm at the tool for the base joint at full reach: less than a block's half edge)."""
+"""rad: the largest change of any joint between two configurations checked along a path near an
+obstacle (about 8 mm at the tool for the base joint at full reach: less than a block's half
+edge); in free space the checks are farther apart (:meth:`CollisionChecker.path_collision`)."""
+
+LOOKAHEAD = 0.05
+"""m: contacts are computed this far out (the moving geoms' margin in the scratch model), so a
+check also says how far the nearest obstacle is, and a path is checked in steps that long."""
 
 TOUCH_TOL = 0.001
 """m: how deep a near contact of the tool may be under :attr:`Allowance.tool_near` (MuJoCo's contact
@@ -101,6 +106,15 @@ class CollisionChecker:
                                            & ~np.isin(np.arange(m.ngeom), self._robot_geoms))
         self._suction_body = m.body(SUCTION_BODY).id
         self._qadr = world.arm_qpos
+        self._joints = np.array([m.joint(j).id for j in ARM_JOINTS])
+        joint_body = {int(m.jnt_bodyid[j]): k for k, j in enumerate(self._joints)}
+        self._last_joint: dict[int, int] = {}
+        for b in range(m.nbody):  # the last arm joint before each body (bodies after the arm: the last)
+            a = b
+            while a and a not in joint_body:
+                a = int(m.body_parentid[a])
+            self._last_joint[b] = joint_body.get(a, len(self._joints) - 1)
+        self._reach = np.ones(len(self._joints))
         self._held: int | None = None
         self._held_geoms = np.empty(0, dtype=int)
         self._held_qadr = -1
@@ -140,11 +154,12 @@ class CollisionChecker:
         for geoms, (ctype, caff) in ((np.concatenate([self._object_geoms, self._table_geoms]), _STATIC_BITS),
                                      (moving, _MOVING_BITS)):
             m.geom_contype[geoms], m.geom_conaffinity[geoms] = ctype, caff
-        m.geom_margin[moving] = self.clearance
+        m.geom_margin[moving] = max(LOOKAHEAD, self.clearance)
         self._moving = np.zeros(m.ngeom, dtype=bool)
         self._moving[moving] = True
         self._tool = np.zeros(m.ngeom, dtype=bool)
         self._tool[[w.cup_geom, *self._held_geoms.tolist()]] = True
+        self._reach = self._joint_reach(w.data, moving)
         for b in range(m.nbody):
             m.body_contype[b] = int(np.bitwise_or.reduce(m.geom_contype[m.geom_bodyid == b], initial=0))
             m.body_conaffinity[b] = int(np.bitwise_or.reduce(m.geom_conaffinity[m.geom_bodyid == b], initial=0))
@@ -155,6 +170,22 @@ class CollisionChecker:
             b = w.body_of[held]
             self._held_rel_pos = sr.T @ (w.data.xpos[b] - sp)
             self._held_rel_mat = sr.T @ w.data.xmat[b].reshape(3, 3)
+
+    def _joint_reach(self, data: mujoco.MjData, moving: np.ndarray) -> np.ndarray:
+        """Per arm joint, a bound (m) on how far from its anchor any point of a moving geom beyond
+        it can be, in any configuration: the chain of anchor-to-anchor distances (fixed by the
+        rigid links) plus the geom's centre from the last anchor before it and its bounding
+        radius.  Turning joint i by dq moves no such point more than ``reach[i] * |dq|``."""
+        m = self.model
+        anchors = data.xanchor[self._joints]
+        links = np.linalg.norm(np.diff(anchors, axis=0), axis=1)  # anchor i to anchor i + 1
+        reach = np.zeros(len(self._joints))
+        for g in moving.tolist():
+            k = self._last_joint[int(m.geom_bodyid[g])]
+            extent = float(np.linalg.norm(data.geom_xpos[g] - anchors[k]) + m.geom_rbound[g] + m.geom_margin[g])
+            for i in range(k + 1):
+                reach[i] = max(reach[i], float(links[i:k].sum()) + extent)
+        return reach
 
     @property
     def held(self) -> int | None:
@@ -196,20 +227,29 @@ class CollisionChecker:
         return int(self.world.geom_obj[static_geom])
 
     # ------------------------------------------------------------------ queries
-    def collision(self, q: np.ndarray, allow: Allowance = Allowance()) -> Collision | None:
-        """The closest contact at joints ``q`` that ``allow`` does not cover, or None if clear."""
+    def _check(self, q: np.ndarray, allow: Allowance) -> tuple[Collision | None, float]:
+        """(The closest contact at joints ``q`` within ``clearance`` that ``allow`` does not cover,
+        or None; the distance (m) to the nearest thing ``allow`` does not cover, at most
+        :data:`LOOKAHEAD`)."""
         worst: Collision | None = None
+        free = LOOKAHEAD
         for g1, g2, dist in self.contacts(q):
-            if (g1, g2) in allow.pairs:
+            if (g1, g2) in allow.pairs and dist < self.clearance:
                 continue
             if self._tool[g1] and (self.owner(g2) in allow.tool_may_touch
                                    or (allow.tool_near and dist > -TOUCH_TOL)):
                 continue
-            if worst is None or dist < worst.dist:
-                part = f"the carried {self._names[g1][4:]}" if self._tool[g1] and g1 != self.world.cup_geom \
-                    else self._names[g1]
-                worst = Collision(part, self._names.get(g2, "the table"), dist, g1, g2)
-        return worst
+            free = min(free, dist)
+            if dist < self.clearance and (worst is None or dist < worst.dist):
+                worst = Collision(self._part(g1), self._names.get(g2, "the table"), dist, g1, g2)
+        return worst, free
+
+    def _part(self, g: int) -> str:
+        return f"the carried {self._names[g][4:]}" if self._tool[g] and g != self.world.cup_geom else self._names[g]
+
+    def collision(self, q: np.ndarray, allow: Allowance = Allowance()) -> Collision | None:
+        """The closest contact at joints ``q`` that ``allow`` does not cover, or None if clear."""
+        return self._check(q, allow)[0]
 
     def tool_inside(self, q: np.ndarray, depth: float) -> Collision | None:
         """The deepest penetration of the cup or the carried object into anything at joints ``q``
@@ -217,36 +257,49 @@ class CollisionChecker:
         worst: Collision | None = None
         for g1, g2, dist in self.contacts(q):
             if self._tool[g1] and dist < -depth and (worst is None or dist < worst.dist):
-                part = f"the carried {self._names[g1][4:]}" if g1 != self.world.cup_geom else self._names[g1]
-                worst = Collision(part, self._names.get(g2, "the table"), dist, g1, g2)
+                worst = Collision(self._part(g1), self._names.get(g2, "the table"), dist, g1, g2)
         return worst
 
     def touching(self, q: np.ndarray) -> frozenset[tuple[int, int]]:
         """The (moving, static) geom pairs within ``clearance`` at joints ``q`` (to allow at a start)."""
-        return frozenset((g1, g2) for g1, g2, _ in self.contacts(q))
+        return frozenset((g1, g2) for g1, g2, d in self.contacts(q) if d < self.clearance)
 
     def tool_owners(self, q: np.ndarray) -> frozenset[int]:
         """Owner ids the cup or the carried object is within ``clearance`` of at joints ``q``."""
-        return frozenset(self.owner(g2) for g1, g2, _ in self.contacts(q) if self._tool[g1])
+        return frozenset(self.owner(g2) for g1, g2, d in self.contacts(q) if self._tool[g1] and d < self.clearance)
 
     def path_collision(self, qs: np.ndarray, allow: Allowance = Allowance()) -> tuple[int, Collision] | None:
         """The first collision along the joint path through the rows of ``qs`` (straight in joint
-        space between rows, checked every :data:`CHECK_STEP`): (row index before it, collision),
-        or None if the whole path is clear."""
+        space between rows): (row index before it, collision), or None if the whole path is clear.
+
+        Checked by conservative advancement: where the nearest thing not allowed is ``d`` away, no
+        point of the arm, the cup or the carried object can come within the clearance of it before
+        the joints have moved ``d - clearance`` metres of reach-weighted change
+        (:meth:`_joint_reach`), so the next check is there, and never nearer than
+        :data:`CHECK_STEP` of the largest joint's change: checks at most that far apart near
+        obstacles, far fewer in free space."""
         qs = np.asarray(qs, float)
         if len(qs) == 0:
             return None
-        hit = self.collision(qs[0], allow)
-        if hit is not None:
-            return 0, hit
-        for i in range(len(qs) - 1):
-            a, b = qs[i], qs[i + 1]
-            n = max(1, int(np.ceil(np.max(np.abs(b - a)) / CHECK_STEP)))
-            for k in range(1, n + 1):
-                hit = self.collision(a + (k / n) * (b - a), allow)
-                if hit is not None:
-                    return i, hit
-        return None
+        steps = np.abs(np.diff(qs, axis=0))
+        metres = np.concatenate([[0.0], np.cumsum(steps @ self._reach)])  # bound on any point's travel
+        joint = np.concatenate([[0.0], np.cumsum(steps.max(axis=1, initial=0.0))])
+        rows = np.arange(len(qs), dtype=float)
+        u = 0.0
+        last = float(len(qs) - 1)
+        while True:
+            i = min(int(u), len(qs) - 2) if len(qs) > 1 else 0
+            q = qs[i] + (u - i) * (qs[i + 1] - qs[i]) if len(qs) > 1 else qs[0]
+            hit, free = self._check(q, allow)
+            if hit is not None:
+                return i, hit
+            if u >= last:
+                return None
+            at_m = float(np.interp(u, rows, metres))
+            at_j = float(np.interp(u, rows, joint))
+            u_far = float(np.interp(at_m + max(free - self.clearance, 0.0), metres, rows))
+            u_near = float(np.interp(at_j + CHECK_STEP, joint, rows))
+            u = min(last, max(u_far, u_near, u + 1e-9))
 
 
 def _copy_model(model: mujoco.MjModel) -> mujoco.MjModel:
