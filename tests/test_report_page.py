@@ -1,8 +1,8 @@
 """``python -m capmj.bench report RUN… --html``: the page, opened from disk in a real headless Chromium.
 
 Two small real runs are made once for the module (tests/report_runs.py): the LLM agent scripted
-through the stub server on task A × two seeds, whose first plan fails, and the same at another
-temperature (a second configuration), whose plans all succeed.  The page must load from ``file://`` with nothing in the browser's console and
+through the stub server on task A × two seeds, and a ``--configs`` run of two configurations of
+it (temperature 0 and 0.5, from a TOML file) on the same seeds; in each run the first plan fails.  The page must load from ``file://`` with nothing in the browser's console and
 no resource fetched, show in its DOM the numbers ``summary.json`` holds, and show exactly the
 failed episodes in its gallery, each with its worker-made thumbnail and the command that opens its
 ``.rrd``.
@@ -24,15 +24,24 @@ from capmj.bench.page.view import legacy_efficiency
 from capmj.bench.results import read_records
 from capmj.bench.rundir import RunDir
 
-FAILING = "llm openai/stub (reporter=none)"
-SOLVING = "llm openai/stub (reporter=none, temperature=0.5)"
+FIRST = "llm openai/stub (reporter=none)"
+CONFIGS = """
+[configs.cold]
+about = "temperature 0"
+temperature = 0.0
+[configs.warm]
+about = "temperature 0.5"
+temperature = 0.5
+"""
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     root = tmp_path_factory.mktemp("runs")
+    (root / "configs.toml").write_text(CONFIGS)
     return (llm_run(root / "llm", [TASK], "10001,10003"),
-            llm_run(root / "llm-t05", [TASK], "10001,10003", "--temperature", "0.5", broken_first=False))
+            llm_run(root / "grid", [TASK], "10001,10003", "--configs", "cold,warm", "--configs-file",
+                    str(root / "configs.toml")))
 
 
 def _failed(run: Path) -> list[Any]:
@@ -45,14 +54,15 @@ def test_the_worker_draws_the_final_top_down_view_of_failed_episodes_only(runs: 
     from capmj.bench.thumbnail import render_top_view
     from capmj.tasks import registry
 
-    llm, solving = runs
-    assert not (solving / "thumbs").exists()  # every episode of this run succeeded
-    failed = _failed(llm)
-    assert len(failed) == 1
-    rec = failed[0]
-    thumbs = sorted(p.relative_to(llm).as_posix() for p in (llm / "thumbs").rglob("*.png"))
-    assert thumbs == [RunDir.thumb_relpath(rec.task, rec.seed, rec.agent, rec.model)]
-    image = np.asarray(Image.open(llm / thumbs[0]).convert("RGB"))
+    for run in runs:  # exactly the failed episodes get a thumbnail, under their configuration's folder
+        failed = _failed(run)
+        assert len(failed) == 1
+        thumbs = sorted(p.relative_to(run).as_posix() for p in (run / "thumbs").rglob("*.png"))
+        assert thumbs == [RunDir.thumb_relpath(r.task, r.seed, r.agent, r.model, r.config) for r in failed]
+    (rec,) = _failed(runs[1])
+    path = runs[1] / RunDir.thumb_relpath(rec.task, rec.seed, rec.agent, rec.model, rec.config)
+    assert rec.config == "cold" and path.parent.parent.name == "cold"
+    image = np.asarray(Image.open(path).convert("RGB"))
     assert image.shape == (160, 320, 3)
     # the picture is the final state: the block the plan moved is not where it started
     start = render_top_view(registry.get_task(rec.task), rec.seed, {})
@@ -92,9 +102,8 @@ def test_the_page_opens_from_disk_shows_the_summary_and_the_failed_episodes(runs
                                                                           tmp_path: Path) -> None:
     from selenium.webdriver.common.by import By
 
-    llm, solving = runs
     out = tmp_path / "cmp"
-    assert report_main([str(llm), str(solving), "--out", str(out), "--html"]) == 0
+    assert report_main([str(runs[0]), str(runs[1]), "--out", str(out), "--html"]) == 0
     page = out / "report.html"
     summary = json.loads((out / "summary.json").read_text())
     log = _open(browser, page)
@@ -122,7 +131,7 @@ def test_the_page_opens_from_disk_shows_the_summary_and_the_failed_episodes(runs
     for key, cell in cells.items():
         assert shown[key] == {"n": cell["n"], "successes": cell["successes"], "rate": cell["success_rate"],
                               "lo": cell["ci95"][0], "hi": cell["ci95"][1]}, key
-    assert shown[(FAILING, "")]["rate"] == 0.5 and shown[(SOLVING, "")]["rate"] == 1.0
+    assert [shown[(c, "")]["rate"] for c in (FIRST, "cold", "warm")] == [0.5, 0.5, 1.0]
 
     # the efficiency table: per episode and per solved episode
     for row in browser.find_elements(By.CSS_SELECTOR, "#efficiency-table tr[data-config]"):
@@ -130,33 +139,37 @@ def test_the_page_opens_from_disk_shows_the_summary_and_the_failed_episodes(runs
         for td in row.find_elements(By.CSS_SELECTOR, "td[data-metric]"):
             want = eff[td.get_attribute("data-per")][td.get_attribute("data-metric")]
             assert _number(td.get_attribute("data-value")) == want
-    row = browser.find_element(By.CSS_SELECTOR, f'#efficiency-table tr[data-config="{FAILING}"]')
+    row = browser.find_element(By.CSS_SELECTOR, f'#efficiency-table tr[data-config="{FIRST}"]')
     tokens = row.find_element(By.CSS_SELECTOR, 'td[data-metric="tokens"][data-per="per_solved"]')
-    total = summary["overall"][FAILING]["llm_usage"]["tokens"]
+    total = summary["overall"][FIRST]["llm_usage"]["tokens"]
     assert _number(tokens.get_attribute("data-value")) == total / 1 > 0  # one episode solved
 
-    # the paired comparison: the second configuration solved the pair the first failed
-    (table,) = browser.find_elements(By.CSS_SELECTOR, "table.comparison")
-    overall = table.find_element(By.CSS_SELECTOR, 'tr[data-task=""]')
-    assert (overall.get_attribute("data-n"), overall.get_attribute("data-only-a"),
-            overall.get_attribute("data-only-b")) == ("2", "0", "1")
+    # the paired comparisons against the first configuration: cold failed the same pair, warm solved it
+    tables = {t.get_attribute("data-b"): t for t in browser.find_elements(By.CSS_SELECTOR, "table.comparison")}
+    assert set(tables) == {"cold", "warm"}
+    for b, only_b in (("cold", "0"), ("warm", "1")):
+        overall = tables[b].find_element(By.CSS_SELECTOR, 'tr[data-task=""]')
+        assert (overall.get_attribute("data-n"), overall.get_attribute("data-only-a"),
+                overall.get_attribute("data-only-b")) == ("2", "0", only_b)
 
-    # the gallery: exactly the failed episodes, each with its thumbnail, label and .rrd command
-    cards = browser.find_elements(By.CSS_SELECTOR, "#gallery article.failed-episode")
-    failed = _failed(llm)
-    assert sorted((c.get_attribute("data-task"), c.get_attribute("data-seed")) for c in cards) == \
-        sorted((r.task, str(r.seed)) for r in failed)
-    card, rec = cards[0], failed[0]
-    assert card.get_attribute("data-failure") == rec.failure == "unknown_object"
-    thumb = card.find_element(By.TAG_NAME, "img")
-    assert browser.execute_script("return arguments[0].naturalWidth", thumb) == 320
-    assert "fixed purple bowl with obj_id 99" in card.text  # the error message
-    card.find_element(By.CSS_SELECTOR, "details.attempt summary").click()
-    assert "put_first_on_second(blocks[1], 'fixed purple bowl with obj_id 99')" in \
-        card.find_element(By.CSS_SELECTOR, "pre.code").text
-    command = card.find_element(By.CSS_SELECTOR, "code.cmd").text
-    rrd = (llm / str(rec.rrd)).resolve()
-    assert rrd.is_file() and command == f"capmj-replay {rrd} --open"
+    # the gallery: exactly the failed episodes of both folders, each with its thumbnail, error, plan and .rrd command
+    cards = {(c.get_attribute("data-config"), c.get_attribute("data-task"), c.get_attribute("data-seed")): c
+             for c in browser.find_elements(By.CSS_SELECTOR, "#gallery article.failed-episode")}
+    failed = {(FIRST if run == runs[0] else str(r.config), r.task, str(r.seed)): (run, r)
+              for run in runs for r in _failed(run)}
+    assert set(cards) == set(failed)
+    for key, card in cards.items():
+        run, rec = failed[key]
+        assert card.get_attribute("data-failure") == rec.failure == "unknown_object"
+        thumb = card.find_element(By.TAG_NAME, "img")
+        assert browser.execute_script("return arguments[0].naturalWidth", thumb) == 320
+        assert "fixed purple bowl with obj_id 99" in card.text  # the error message
+        card.find_element(By.CSS_SELECTOR, "details.attempt summary").click()
+        assert "put_first_on_second(blocks[1], 'fixed purple bowl with obj_id 99')" in \
+            card.find_element(By.CSS_SELECTOR, "pre.code").text
+        command = card.find_element(By.CSS_SELECTOR, "code.cmd").text
+        rrd = (run / str(rec.rrd)).resolve()
+        assert rrd.is_file() and command == f"capmj-replay {rrd} --open"
     browser.save_screenshot(str(tmp_path / "page.png"))
 
 
@@ -165,7 +178,7 @@ def test_a_run_without_thumbnails_profile_or_anomalies_still_gets_a_page(runs: t
     """An older run: no thumbs/, a summary with only the per-task cells — the page says what is missing."""
     import shutil
 
-    llm, _ = runs
+    llm = runs[0]
     old = tmp_path / "old"
     shutil.copytree(llm, old)
     shutil.rmtree(old / "thumbs")

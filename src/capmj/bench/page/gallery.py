@@ -90,7 +90,7 @@ def failed_episodes(dirs: Sequence[str | Path]) -> list[FailedEpisode]:
     for rec, run in zip(records, folder_of):
         if rec.success:
             continue
-        thumb = run.root / RunDir.thumb_relpath(rec.task, rec.seed, rec.agent, rec.model)
+        thumb = run.root / RunDir.thumb_relpath(rec.task, rec.seed, rec.agent, rec.model, rec.config)
         out.append(FailedEpisode(
             config=labels[id(rec)], task=rec.task, seed=rec.seed, failure=rec.failure, error=rec.error,
             goal=rec.goal, progress=rec.progress, diagnostics=tuple(rec.diagnostics),
