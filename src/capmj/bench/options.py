@@ -65,14 +65,19 @@ PERCEPTION = Flag(("--perception",), "perception", "what the planner API of the 
                   "entry points; see docs/perception.md)", perception_mode, "MODE")
 
 AGENT_FLAGS: tuple[Flag, ...] = (
-    Flag(("--reporter",), "reporter", "completion reporter", choices=REPORTERS),
+    Flag(("--reporter",), "reporter", "completion reporter; --reporter text runs with the loop policy and prompt "
+         "measured never to hurt, careful + relations, unless --loop-policy/--reporter-prompt say otherwise (the "
+         "thesis's loop: --configs thesis, or --loop-policy thesis --reporter-prompt thesis; docs/llm.md)",
+         choices=REPORTERS),
     Flag(("--attempts",), "attempts", "plan attempts (closed loop)", int, "N"),
     Flag(("--on-unknown",), "on_unknown", "what an unknown reporter verdict does (default: replan)",
          choices=ON_UNKNOWN),
-    Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: thesis (default: reset and re-plan "
-         "after any failure) or careful (judge a raising plan's state, re-plan from here on a partial verdict, stop "
-         "on a low-confidence one; docs/llm.md)", choices=LOOP_POLICIES),
-    Flag(("--reporter-prompt",), "reporter_prompt", reporter_prompt_help(), choices=REPORTER_PROMPTS),
+    Flag(("--loop-policy",), "loop_policy", "what the loop does after an attempt: careful (the default with "
+         "--reporter text: judge a raising plan's state, re-plan from here on a partial verdict, stop on a "
+         "low-confidence one) or thesis (reset and re-plan after any failure: the thesis's loop, the default with "
+         "--reporter vlm; docs/llm.md)", choices=LOOP_POLICIES),
+    Flag(("--reporter-prompt",), "reporter_prompt", reporter_prompt_help() + " (with --reporter text the bench's "
+         "default is relations, the prompt measured never to hurt)", choices=REPORTER_PROMPTS),
     Flag(("--replan-temperature",), "replan_temperature", "sampling temperature of the planner in attempts 2, 3, "
          "... (default: 0.7)", float, "T"),
     Flag(("--replan-retries",), "replan_retries", "requests after a re-plan identical to an earlier plan, each "
