@@ -466,7 +466,9 @@ def test_bench_cli_runs_the_llm_agent_in_a_worker_and_logs_every_prompt(server: 
 
     server.respond_with(full_router())
     out = tmp_path / "run"
+    # the thesis's chain, which the router answers: since #49 item 7 --reporter text alone runs careful + relations
     rc = main(["--agent", "llm", "--model", "openai/stub", "--api-base", server.base_url, "--reporter", "text",
+               "--loop-policy", "thesis", "--reporter-prompt", "thesis",
                "--attempts", "3", "--tasks", TASK, "--seeds", str(SEED), "--workers", "1", "--out", str(out),
                "--no-progress"])
     assert rc == 0

@@ -257,7 +257,11 @@ def test_manifest_records_the_run_and_report_warns_when_a_prompt_changed(
     assert mb["prompts"]["system.txt"] != m["prompts"]["system.txt"]
     assert mb["prompts"]["planner.py"] == m["prompts"]["planner.py"]
     capsys.readouterr()
-    assert main(["report", str(run_a), str(tmp_path / "b"), "--out", str(tmp_path / "cmp")]) == 0
+    # the prompts are part of the task stamp: report refuses the two runs unless told to compare them (#49 item 4)
+    assert main(["report", str(run_a), str(tmp_path / "b"), "--out", str(tmp_path / "cmp")]) == 2
+    assert "stamps differ" in capsys.readouterr().err
+    assert main(["report", str(run_a), str(tmp_path / "b"), "--out", str(tmp_path / "cmp"),
+                 "--allow-version-mismatch"]) == 0
     out, err = capsys.readouterr()
     assert "warning: prompts.system.txt differs" in err and "prompts.planner.py" not in err
     assert "## Warnings: the combined runs differ" in out

@@ -203,7 +203,7 @@ def listing(configs: Iterable[Configuration]) -> list[str]:
         except ConfigError as exc:
             state = f"  [not available: {exc}]"
         opts = ", ".join(f"{k}={v}" for k, v in c.options.items()) or "(defaults)"
-        lines.append(f"  {c.name:<8} {opts:<58} {c.about}{state}")
+        lines.append(f"  {c.name:<8} {opts:<62} {c.about}{state}")
     return lines
 
 
