@@ -24,7 +24,7 @@ The tool always points straight down; a tool pose is a position and a yaw about 
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Callable, Iterable, Protocol, Sequence
 
 import numpy as np
 
@@ -78,13 +78,13 @@ def _owners(world: World) -> list[int]:
 class ContactWatch:
     """New contacts of the robot and its load during one move (see the module docstring)."""
 
-    def __init__(self, world: World, owners: list[int], released: int | None = None) -> None:
+    def __init__(self, world: World, owners: list[int], allowed: Iterable[tuple[int, int]] = ()) -> None:
         self._world = world
         self._owner = owners
         self._held = world.suction.held
-        self._start = self._pairs()
-        if released is not None:  # the cup leaving what it has just let go touches it on the way
-            self._start.add((_CUP, released))
+        self._start = self._pairs() | set(allowed)
+        """What may touch: the contacts now, and ``allowed`` (those the last move ended with, which
+        may part and touch again as this one leaves them; the object the cup has just let go)."""
         self.hit: tuple[int, int] | None = None
         """The first new contact, as (robot side: ``_CUP``, ``_LINK`` or the held obj_id; the other
         side's owner code)."""
@@ -123,6 +123,10 @@ class ContactWatch:
                 return True
         return False
 
+    def ending(self) -> set[tuple[int, int]]:
+        """The contacts at the end of the move (its stopping contact included), for the next move."""
+        return self._pairs() | ({self.hit} if self.hit is not None else set())
+
     def tool_contact(self) -> bool:
         """Whether :attr:`hit` is the tool's own contact: the cup's with nothing held, the carried
         object's when one is held."""
@@ -143,8 +147,9 @@ class RobotDriver:
         self._owners = _owners(api.ctx.world)
         self._gripped: tuple[int, np.ndarray, np.ndarray] | None = None
         """Perceived mode: (the perceived object gripped, its centre then, the tip then)."""
-        self._released: int | None = None
-        """The object the suction let go of last, until the next move (the cup may touch it as it leaves)."""
+        self._recent: set[tuple[int, int]] = set()
+        """Contacts the next move may part from and touch again: those the last move ended with,
+        and the cup on the object the suction has just let go."""
 
     # ------------------------------------------------------------------ reading
     @property
@@ -291,9 +296,11 @@ class RobotDriver:
         ctx.check_budget(ctx.budget.max_primitives * MOVES_PER_PRIMITIVE, "low-level moves")
         w = self.world
         start, steps0, t0 = w.tip_pose()[0], w.steps, w.time
-        watch = ContactWatch(w, self._owners, self._released)
-        self._released = None
-        status = run(watch)
+        watch = ContactWatch(w, self._owners, self._recent)
+        try:
+            status = run(watch)
+        finally:
+            self._recent = watch.ending()
         touched = status == "stopped" and (guarded and watch.tool_contact())
         collided = status == "stopped" and not touched
         end = w.tip_pose()[0]
@@ -337,7 +344,8 @@ class RobotDriver:
         """Switch the suction off: what it held is let go and the scene perceived again (rgbd)."""
         w = self.world
         was = w.suction.release()
-        self._released = was
+        if was is not None:
+            self._recent.add((_CUP, was))
         w.step(self.motion.cfg.release_dwell_steps)
         scene = self._perceiving()
         if scene is not None and was is not None:
