@@ -1,11 +1,11 @@
-"""Relations a goal names that a check never asks for (capmj.agents.report.relations.coverage): each word
+"""Relations a goal names that a check never asks for (capmj.agents.report.relations.reporter): each word
 finds the partial check it is for, and a check that asks for every named relation passes."""
 
 from __future__ import annotations
 
 import pytest
 
-from capmj.agents.report.relations.coverage import uncovered
+from capmj.agents.report.relations.reporter import uncovered
 
 
 @pytest.mark.parametrize(("code", "goal", "says"), [

@@ -19,7 +19,7 @@ from module_loader import ROOT
 
 from capmj.agents.report.confidence import LOW_CONFIDENCE, assess
 from capmj.agents.report.verdict import Report
-from capmj.agents.report.scene_facts import facts_text, resolve_name, scene_facts
+from capmj.agents.report.scene import facts_text, resolve_name, scene_facts
 from capmj.bench.cli import main
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.judge.judgeset import build_cases
@@ -74,7 +74,6 @@ def test_names_resolve_to_real_objects_and_the_confidence_follows(bowl_cases: tu
         "direct_fallback": Report("text", False, "no", source="direct", wrong=(block.name,)),
         "copies_example": Report("text", False, "no", wrong=(block.name,), doubt="copies_example"),
         "holds_at_start": Report("text", True, "yes", doubt="holds_at_start"),
-        "blind_check": Report("text", False, "no", wrong=(block.name,), doubt="blind_check"),
         "impossible_check": Report("text", False, "no", wrong=(block.name,), doubt="impossible_check"),
         "ungrounded_literal": Report("text", False, "no", wrong=(block.name,), doubt="ungrounded_literal"),
         "misses_a_relation": Report("text", True, "yes", doubt="misses_a_relation"),

@@ -30,9 +30,6 @@ REPORTER_TABLE: dict[str, dict[str, ReporterEntry]] = {
     "text": {
         "thesis": ReporterEntry("capmj.agents.report.text:TextReporter", "default: checking code"),
         "checked": ReporterEntry("capmj.agents.report.checked:CheckedReporter", "capmj binds the scene facts as text"),
-        "records": ReporterEntry("capmj.agents.report.records:RecordsReporter", "as records for checking code"),
-        "goalcheck": ReporterEntry("capmj.agents.report.goalcheck:GoalCheckReporter",
-                                   "a check written from the goal and the objects, run on the measured records"),
         "relations": ReporterEntry("capmj.agents.report.relations.reporter:RelationsReporter",
                                    "the goal as calls of pre-bound relation checks; docs/judge.md"),
     },

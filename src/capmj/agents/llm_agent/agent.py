@@ -50,11 +50,11 @@ from capmj.agents.llm_agent.options import LLMAgentOptions, llm_agent_configs
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.llm_agent.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
-from capmj.agents.report.plan_check import plan_check
 from capmj.agents.llm_agent.multiturn import run_turns
 from capmj.agents.llm_agent.tools import check_tool_calling, run_tool_turns
 from capmj.agents.llm_agent.planner import Feedback, PlanOutcome, plan_and_run, replan_sampling
 from capmj.agents.report.registry import Reporter, make_reporter
+from capmj.agents.report.text import plan_check
 from capmj.agents.report.verdict import Report
 from capmj.errors import ConfigError, LLMError, PlanError, describe, error_facts
 from capmj.llm import LLMClient, LLMConfig

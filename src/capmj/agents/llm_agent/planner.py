@@ -24,9 +24,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from capmj.agents.lmp.session import LMPCall, LMPSession
+from capmj.agents.lmp.session import Draft, LMPCall, LMPSession
 from capmj.agents.prompt_files import object_names
-from capmj.agents.sandbox import SandboxBudget, extract_code, run_code
+from capmj.agents.sandbox import SandboxBudget, extract_code
 from capmj.errors import PlanError, describe
 from capmj.llm.provider import derived_seed
 
@@ -275,16 +275,15 @@ def plan_and_run(session: LMPSession, goal: str, *, feedback: Feedback | None = 
     env = session.plan_env()
     env["objects"] = object_names(session.objects_text()) or []
     env["goal"] = goal
+    draft = Draft()
     try:
-        code = out.code = extract_code(out.completion)
-        code = out.code = session.prepare(code, env, parent=call, program="the plan")
-        session.record(call, "code", code)
-        run_code(code, env, budget=budget, filename=f"<plan attempt {session.attempt}>", output=out.output,
-                 program="the plan", rng=session.rng)
+        session.run_answer(call, out.completion, env, filename=f"<plan attempt {session.attempt}>", program="the plan",
+                           budget=budget, rng=session.rng, output=out.output, draft=draft)
     except PlanError as exc:
         session.record(call, "error", describe(exc))
         raise
     finally:
+        out.code = draft.code if draft.code is not None else out.code
         if out.output:
             session.recorder.text(f"llm/attempt{session.attempt}/planner/{call.n}/printed", "\n".join(out.output))
     session.record(call, "result", "plan finished")

@@ -5,7 +5,9 @@ system prompt (``prompts/system.txt``) and the name of the variable its code mus
 (``ret_val`` for ``parse_obj_name`` / ``parse_position``, ``judge`` for ``parse_completion``; the
 planner sets nothing, it acts).  One :class:`LMPSession` serves one attempt of one episode: it
 owns the API environment, numbers and records every call, and synthesises functions that code
-calls but nobody defined (``parse_function``), recursively up to ``max_fn_depth``.  The static
+calls but nobody defined (``parse_function``), recursively up to ``max_fn_depth``.  Every
+LLM-written program takes one step, :meth:`LMPSession.run_answer` (extract -> prepare -> run; its
+first half :meth:`LMPSession.prepare_answer`): the helper LMPs, the planner and the reporters.  The static
 code preparation it relies on (benign-import removal, undefined-call scan) is in
 :mod:`capmj.agents.lmp.codeprep`.
 
@@ -33,7 +35,7 @@ from capmj.errors import (FunctionNotWritten, HelperCallsExceeded, LLMError, Pla
                           TextBudgetExceeded, describe, inner_text)
 from capmj.record import NullRecorder, Recorder
 
-__all__ = ["ACTION_FUNCTIONS", "DEFAULT_EPISODE_MAX_HELPER_CALLS", "HelperCallCap", "LMPCall", "LMPSession",
+__all__ = ["ACTION_FUNCTIONS", "DEFAULT_EPISODE_MAX_HELPER_CALLS", "Draft", "HelperCallCap", "LMPCall", "LMPSession",
            "find_llm_error", "messages_text"]
 
 ACTION_FUNCTIONS = frozenset({"put_first_on_second", "stack_objects_in_order", "reset"})
@@ -108,6 +110,14 @@ def messages_text(messages: Sequence[Mapping[str, Any]]) -> str:
 # the session
 # ------------------------------------------------------------------------------------------------
 @dataclass
+class Draft:
+    """An answer's code on its way to the sandbox, as far as it got: None (none found yet), the
+    extracted code, then the prepared code (what an error's line number refers to)."""
+
+    code: str | None = None
+
+
+@dataclass
 class LMPCall:
     """One entry of a transcript."""
 
@@ -157,7 +167,7 @@ class LMPSession:
     """The episode's count of helper LMP calls (the agent shares one across its attempts)."""
     check: Callable[..., Any] | None = None
     """The plan's ``parse_completion(goal, context=None)``: the text reporter over the current scene
-    (:func:`capmj.agents.report.plan_check.plan_check`), bound by the agent that has one; None, plan code
+    (:func:`capmj.agents.report.text.plan_check`), bound by the agent that has one; None, plan code
     cannot call it."""
     _counters: dict[str, int] = field(default_factory=dict)
     _system: str | None = None
@@ -272,6 +282,33 @@ class LMPSession:
                                     env=env, code=code, program=program)
         return f"{WRITTEN_START}\n{functions}{WRITTEN_END}\n{code}"
 
+    def prepare_answer(self, call: LMPCall, text: str, env: Mapping[str, Any], *, program: str = "the code",
+                       vet: Callable[[str], None] | None = None, draft: Draft | None = None) -> str:
+        """The first half of the step every LLM-written program takes: the code of answer ``text``
+        (:func:`~capmj.agents.sandbox.extract_code`), ``vet``-ted (it may raise), :meth:`prepare`-d for
+        the names of ``env`` and recorded as the call's ``code``.  PlanError propagates; ``draft``
+        holds the code as far as it got."""
+        draft = draft if draft is not None else Draft()
+        draft.code = extract_code(text)
+        if vet is not None:
+            vet(draft.code)
+        draft.code = self.prepare(draft.code, env, parent=call, program=program)
+        self.record(call, "code", draft.code)
+        return draft.code
+
+    def run_answer(self, call: LMPCall, text: str, env: dict[str, Any], *, filename: str, program: str | None = None,
+                   budget: SandboxBudget | None = None, rng: np.random.Generator | None = None,
+                   output: list[str] | None = None, draft: Draft | None = None) -> dict[str, Any]:
+        """Extract -> prepare -> run: the code of answer ``text`` (:meth:`prepare_answer`) run in the
+        sandbox with ``env`` (``budget``: the LMP budget unless given); the code's final namespace.
+        ``program`` names the code in errors (unnamed: "the code" in preparation, none in the run).
+        PlanError propagates, unrecorded (each caller says it its way); ``draft`` holds the code as
+        far as it got."""
+        draft = draft if draft is not None else Draft()
+        code = self.prepare_answer(call, text, env, program=program or "the code", draft=draft)
+        return run_code(code, env, budget=budget if budget is not None else self.lmp_budget, filename=filename,
+                        output=output, program=program, rng=rng)
+
     def synthesize(self, missing: list[tuple[str, int, str]], known: set[str], *, depth: int,
                    env: Mapping[str, Any] | None = None, code: str = "",
                    program: str = "the code") -> str:
@@ -310,14 +347,9 @@ class LMPSession:
         rejected or failing program is recorded on the call and re-raised as ``PlanError``.
         """
         text = self.ask(call, self.messages(self.prompt(lmp).render(question)))
-        program = f"the code {lmp} wrote"
         try:
-            code = extract_code(text)
-            env = self.helper_env(question)
-            code = self.prepare(code, env, parent=call, program=program)
-            self.record(call, "code", code)
-            return run_code(code, env, budget=self.lmp_budget, filename=f"<{lmp} {self.attempt}.{call.n}>",
-                            program=program, rng=self.rng)
+            return self.run_answer(call, text, self.helper_env(question), filename=f"<{lmp} {self.attempt}.{call.n}>",
+                                   program=f"the code {lmp} wrote", rng=self.rng)
         except PlanError as exc:
             self.record(call, "error", describe(exc))
             raise

@@ -1,36 +1,26 @@
 """The ``checked`` text-reporter prompt: capmj binds the scene facts, the model only compares.
 
-``--reporter-prompt thesis`` (the default) is the thesis's text reporter,
-:class:`~capmj.agents.report.text.TextReporter`: the ``parse_completion`` LMP writes checking code that
-must itself derive positions, containment and stacking.  ``--reporter-prompt checked`` is
-:class:`CheckedReporter`: one request with ``prompts/reporter_checked.txt``, which lists the facts
-:mod:`capmj.agents.report.scene_facts` measured with the tasks' own rules (per object: centre, quarter of
+One request with ``prompts/reporter_checked.txt``, which lists the facts
+:mod:`capmj.agents.report.scene` measured with the tasks' own rules (per object: centre, quarter of
 the table, what it rests on, the zone or bowl it is in, tilt) and asks for ``judge``, ``reason``
-and ``wrong`` — the full names of the objects that break the goal.
-
-The answer is parsed with :mod:`ast`, never executed (:func:`~capmj.agents.report.verdict.parse_verdict`).
-An answer without a verdict gets one repair request in the same conversation; still none: unknown.
-Sources: ``code`` (the first answer's code block), ``repair``, ``unknown`` — no ``direct`` fallback,
-since this prompt already is a direct question.  Whether the verdict can be trusted (does it name
-real objects?) is :func:`capmj.agents.report.confidence.assess`, applied to either prompt's verdict.
-
-A verdict whose reason is the prompt file's own example word for word is marked
-``doubt="copies_example"`` (low confidence): it says nothing of the scene.  Why this prompt and
-this gate exist: ``docs/judge.md``, "Why each gate exists".
+and ``wrong`` — the full names of the objects that break the goal.  The answer is parsed, never
+executed; it runs the reporters' one loop (:func:`~capmj.agents.report.verdict.ask_for_verdict`):
+no verdict, one repair request; still none, unknown (no ``direct`` fallback: this prompt already
+is a direct question).  Its one gate, :data:`COPIES_EXAMPLE`, doubts a reason that is the prompt's
+own example word for word.  It is also the ``relations`` reporter's fallback.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
-from capmj.agents.lmp.session import LMPSession
+from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.prompt_files import prompts_dir
-from capmj.agents.report.verdict import Report, ask_verdict
-from capmj.agents.report.scene_facts import facts_text, scene_facts, state_from_api
+from capmj.agents.report.scene import facts_text, scene_facts, state_from_api
+from capmj.agents.report.verdict import Answer, Gate, Reading, Report, ask_for_verdict, gated, literal_reading
 from capmj.errors import ConfigError
 
-__all__ = ["PROMPT_FILE", "CheckedReporter"]
+__all__ = ["COPIES_EXAMPLE", "PROMPT_FILE", "CheckedReporter"]
 
 PROMPT_FILE = "reporter_checked.txt"
 
@@ -39,11 +29,25 @@ MIN_COPIED_CHARS = 20
 (shorter ones, such as "all blocks are in place", can match by chance)."""
 
 
+def _copies(subject: tuple[str, str]) -> str | None:
+    reason, template = subject
+    reason = " ".join(reason.split())
+    copied = len(reason) >= MIN_COPIED_CHARS and reason in " ".join(template.split())
+    return "its reason is the prompt's own example, word for word" if copied else None
+
+
+COPIES_EXAMPLE: Gate[tuple[str, str]] = Gate(
+    "copies_example", None, "its reason is the prompt's own example, word for word", _copies, repairs=False)
+"""A reason that is the prompt file's own example says nothing of the scene: doubted at once (on
+``(reason, template)``)."""
+
+
 class CheckedReporter:
     """The text reporter with capmj-computed facts (``--reporter-prompt checked``)."""
 
     mode = "text"
     prompt = "checked"
+    gates: tuple[Gate[Any], ...] = (COPIES_EXAMPLE,)
 
     def __init__(self, prompt_directory: Any = None) -> None:
         self.directory = prompt_directory
@@ -68,17 +72,20 @@ class CheckedReporter:
 
     def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
         template = self.template(session)
-        messages = session.messages(self.question(session, ctx, goal, template))
-        report, errors = ask_verdict(
-            session, self.mode, lambda source: session.next_call("reporter_checked", goal), messages,
-            "Answer only with one ```python block that sets judge = True or False, reason = a short explanation and "
-            "wrong = [full names of the objects whose facts break the goal].")
-        if report is None:
-            return Report(self.mode, None, "", errors[-1], "unknown", (), errors)
-        reason = " ".join(report.reason.split())
-        if len(reason) >= MIN_COPIED_CHARS and reason in " ".join(template.split()):
-            return dataclasses.replace(report, doubt="copies_example")
-        return report
+
+        def read(call: LMPCall, answer: Answer, last: bool) -> Reading:
+            got = literal_reading(session, call, answer)
+            return got if got.problem is not None else gated(session, call, self.gates, (got.reason, template), got,
+                                                             last)
+
+        return ask_for_verdict(
+            session, self.mode, session.messages(self.question(session, ctx, goal, template)),
+            call=lambda source: session.next_call("reporter_checked", goal), read=read,
+            repair=lambda answer, problem: (
+                f"Your answer gave no verdict: {problem}. Answer only with one ```python block that sets judge = True "
+                "or False, reason = a short explanation and wrong = [full names of the objects whose facts break the "
+                "goal]."),
+            fallback=lambda errors: Report(self.mode, None, "", errors[-1], "unknown", (), errors))
 
     def close(self) -> None:
         return None

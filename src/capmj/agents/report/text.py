@@ -1,25 +1,48 @@
-"""The text reporter: the ``parse_completion`` LMP writes checking code over the settled scene.
+"""The text reporter (``--reporter text``, the ``thesis`` prompt): the ``parse_completion`` LMP writes
+checking code over the settled scene, and :func:`plan_check` is the same reporter as the
+``parse_completion`` a plan may call.
 
 The code sets ``judge`` (bool), ``reason`` and optionally ``wrong`` (names of the objects whose
 state is wrong); it runs in the sandbox with the read-only API plus the pre-bound names of
 :mod:`capmj.agents.report.text_env` (``poses``, ``sizes``, ``goal_objects``, ``in_zone`` ...), so a
-completion that drops its first line still runs.  :class:`TextReporter` is the ``thesis`` prompt of
-``--reporter text``; the other reporters and how one is chosen by name are in
-:mod:`capmj.agents.report` (the vision-language one: :mod:`capmj.agents.report.vlm`).
-
-What a verdict is, where it came from (``code``, ``repair``, ``direct``, ``unknown``) and how it is
-read from an answer: :mod:`capmj.agents.report.verdict`.
+completion that drops its first line still runs.  It runs the reporters' one loop
+(:func:`~capmj.agents.report.verdict.ask_for_verdict`): code, one repair quoting the error and its
+line, then the direct question.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from typing import Any
 
-from capmj.agents.lmp.session import LMPCall, LMPSession
-from capmj.agents.report.text_env import PREBOUND, reporter_env
-from capmj.agents.report.verdict import CheckRun, Report, check, direct_verdict
+import numpy as np
 
-__all__ = ["TextReporter"]
+from capmj.agents.base import JUDGE_SETTLE_STEPS
+from capmj.agents.lmp.session import Draft, LMPCall, LMPSession
+from capmj.agents.report.text_env import PREBOUND, reporter_env
+from capmj.agents.report.verdict import Answer, Reading, Report, ask_for_verdict, direct_verdict, names_of, record_reading
+from capmj.errors import PlanError, describe
+
+__all__ = ["TextReporter", "failing_line", "plan_check", "reading_of"]
+
+
+def failing_line(exc: PlanError, code: str) -> str:
+    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
+    lines = code.splitlines()
+    if exc.line is None or not 1 <= exc.line <= len(lines):
+        return ""
+    return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
+
+
+def reading_of(namespace: Mapping[str, Any]) -> Reading:
+    """The verdict checking code left in its namespace: a bool ``judge``, ``reason``, ``wrong``."""
+    judge, reason = namespace.get("judge"), namespace.get("reason")
+    reason = reason if isinstance(reason, str) else ""
+    if not isinstance(judge, (bool, np.bool_)):
+        problem = ("the code did not set 'judge'" if "judge" not in namespace
+                   else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
+        return Reading(None, reason, problem=problem)
+    return Reading(bool(judge), reason, names_of(namespace.get("wrong")))
 
 
 def _repair_request(problem: str, question: str) -> str:
@@ -30,9 +53,6 @@ def _repair_request(problem: str, question: str) -> str:
             "state is wrong].\n" + question + "\n")
 
 
-# ------------------------------------------------------------------------------------------------
-# text reporter
-# ------------------------------------------------------------------------------------------------
 class TextReporter:
     """``parse_completion`` over the settled scene: code, one repair, then the direct verdict."""
 
@@ -48,27 +68,52 @@ class TextReporter:
         sentence = " ".join(goal.split())
         sentence = sentence if sentence.endswith((".", "?", "!")) else sentence + "."
         question = f"{session.objects_text().strip()}\n# goal: {sentence}"
-        messages = session.messages(session.prompt("parse_completion").render(question))
-        errors: tuple[str, ...] = ()
-        for source in ("code", "repair"):
-            call = session.next_call("parse_completion", goal)
-            text = session.ask(call, messages)
-            run = self._run(session, call, text, ctx, goal, question)
-            problem = run.problem
-            if problem is None:
-                return Report(self.mode, run.verdict, run.reason, errors[-1] if errors else None, source, run.wrong,
-                              errors)
-            errors += (f"{source}: {problem}",)
-            messages = messages + [{"role": "assistant", "content": text},
-                                   {"role": "user", "content": _repair_request(problem, question)}]
-        return direct_verdict(session, goal, self.mode, errors)
 
-    @staticmethod
-    def _run(session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, question: str) -> CheckRun:
-        """The run of one answer's checking code."""
-        env = session.helper_env(question)
-        env.update(reporter_env(session.api, ctx.world.objects, goal))  # fresh: code may mutate it
-        return check(session, call, text, env, f"<parse_completion {session.attempt}.{call.n}>")
+        def read(call: LMPCall, answer: Answer, last: bool) -> Reading:
+            env = session.helper_env(question)
+            env.update(reporter_env(session.api, ctx.world.objects, goal))  # fresh: code may mutate it
+            draft = Draft()
+            try:
+                namespace = session.run_answer(call, answer.text, env, draft=draft,
+                                               filename=f"<parse_completion {session.attempt}.{call.n}>")
+            except PlanError as exc:
+                return record_reading(session, call, Reading(None, problem=describe(exc) + failing_line(
+                    exc, draft.code or "")))
+            return record_reading(session, call, reading_of(namespace))
+
+        return ask_for_verdict(
+            session, self.mode, session.messages(session.prompt("parse_completion").render(question)),
+            call=lambda source: session.next_call("parse_completion", goal), read=read,
+            repair=lambda answer, problem: _repair_request(problem, question),
+            fallback=lambda errors: direct_verdict(session, goal, self.mode, errors))
 
     def close(self) -> None:
         return None
+
+
+def plan_check(session: LMPSession, ctx: Any) -> Callable[..., bool]:
+    """The ``parse_completion(goal, context=None)`` function of one attempt's plan.
+
+    CapRavens' plans check their own work and retry (``if not parse_completion(...): reset()``).
+    This one lets the world come to rest, as before any verdict, runs :class:`TextReporter` on the
+    scene as it is now and returns its verdict as a bool.  ``context`` is accepted and not needed
+    (the reporter reads the same live poses); an unknown verdict is False (the plan's retry branch
+    runs).  Its calls are in the transcript and the log; its verdict never stands in for the one
+    the agent asks for after the plan."""
+    reporter = TextReporter()
+    count = 0
+
+    def parse_completion(goal: Any, context: Any = None) -> bool:
+        """Whether ``goal`` is achieved in the scene as it is now (the text reporter's verdict)."""
+        nonlocal count
+        session.helper_cap.take("parse_completion")
+        count += 1
+        ctx.world.settle(max_steps=JUDGE_SETTLE_STEPS)
+        report = reporter.judge(session, ctx, str(goal))
+        verdict = report.verdict is True
+        session.recorder.text(f"llm/attempt{session.attempt}/plan_check/{count}",
+                              f"goal: {' '.join(str(goal).split())}\nverdict: {report.verdict!r} "
+                              f"(from {report.source}) -> {verdict}\nreason: {report.reason}", ctx.world.time)
+        return verdict
+
+    return parse_completion

@@ -14,15 +14,16 @@ the example defined inline still runs (why: ``docs/judge.md``, "Why each gate ex
                    "<colour> <kind>" phrase of the goal that names exactly one object; each is
                    also bound as a variable ``orange_zone = 'fixed orange zone with obj_id 1'``
 ``size(name)``     a block's edge length (0.0 for other objects)
-``upright(name)``  roll and pitch within 0.26 rad of a multiple of pi/2
+``upright(name)``  roll and pitch within ``TILT_TOL`` of a multiple of pi/2
 ``in_zone(obj, zone)``  centre inside the zone's square, turned with the zone and of its size
                    (:func:`capmj.tasks.predicates.in_square`: the tasks' one rule)
-``in_bowl(obj, bowl)``  centre within 0.05 m of the bowl centre in x-y
-``on_top(upper, lower)``  centres within 0.02 m in x-y and resting: z difference = mean of the two
-                   sizes +- 0.015 m
+``in_bowl(obj, bowl)``  centre within ``BOWL_TOL`` of the bowl centre in x-y
+``on_top(upper, lower)``  centres within ``STACK_AXIS_TOL`` in x-y and resting: z difference = mean
+                   of the two sizes +- ``Z_TOL``
 
-The thresholds are the ones ``prompts/parse_completion.py`` states to the model.  These are
-geometric helpers, not the task predicates: the reporter still has to decide what the goal means.
+The thresholds are the task predicates' tolerances (:mod:`capmj.tasks.predicates`), the ones
+``prompts/parse_completion.py`` states to the model.  These are geometric helpers, not the task
+predicates: the reporter still has to decide what the goal means.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from typing import Any
 
 from capmj.agents.api.names import near_miss, porting_difference
 from capmj.sim.objects import BLOCK_SIZES, ObjectSpec
-from capmj.tasks.predicates import in_square
+from capmj.tasks.predicates import BOWL_TOL, STACK_AXIS_TOL, TILT_TOL, Z_TOL, in_square
 
 __all__ = ["PREBOUND", "NamedPoses", "goal_objects", "reporter_env"]
 
@@ -42,11 +43,6 @@ PREBOUND = ("poses", "object_positions", "sizes", "blocks", "zones", "bowls", "g
             "in_bowl", "on_top")
 """Names the reporter's code may use without defining them (listed in the repair request), besides
 the ``<colour>_<kind>`` variables of the goal's named objects."""
-
-BOWL_RADIUS = 0.05
-STACK_XY = 0.02
-STACK_Z = 0.015
-TILT = 0.26
 
 
 def goal_objects(goal: str, objects: Sequence[Any]) -> dict[str, str]:
@@ -100,10 +96,10 @@ def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], 
         return sizes.get(name, 0.0)
 
     def upright(name: str) -> bool:
-        """True when the object is not tilted (|roll|, |pitch| within 0.26 rad of a multiple of pi/2)."""
+        """True when the object is not tilted (|roll|, |pitch| within TILT_TOL of a multiple of pi/2)."""
         _pos(name)
         quarter = math.pi / 2
-        return all(min(abs(a) % quarter, quarter - abs(a) % quarter) < TILT for a in poses[name][1][:2])
+        return all(min(abs(a) % quarter, quarter - abs(a) % quarter) < TILT_TOL for a in poses[name][1][:2])
 
     def in_zone(obj: str, zone: str) -> bool:
         """True when ``obj``'s centre lies inside ``zone``'s square (its yaw and size honoured)."""
@@ -113,15 +109,15 @@ def reporter_env(api: Mapping[str, Callable[..., Any]], objects: Sequence[Any], 
         return in_square(_pos(obj), centre, poses[zone][1][2], zone_half[zone])
 
     def in_bowl(obj: str, bowl: str) -> bool:
-        """True when ``obj``'s centre lies within 0.05 m of ``bowl``'s centre in x-y."""
+        """True when ``obj``'s centre lies within BOWL_TOL of ``bowl``'s centre in x-y."""
         (x, y, _), (bx, by, _) = _pos(obj), _pos(bowl)
-        return math.hypot(x - bx, y - by) < BOWL_RADIUS
+        return math.hypot(x - bx, y - by) < BOWL_TOL
 
     def on_top(upper: str, lower: str) -> bool:
         """True when ``upper`` rests directly on ``lower`` (aligned in x-y, touching in z)."""
         (x1, y1, z1), (x0, y0, z0) = _pos(upper), _pos(lower)
         gap = (size(upper) + size(lower)) / 2
-        return math.hypot(x1 - x0, y1 - y0) < STACK_XY and abs(z1 - z0 - gap) < STACK_Z
+        return math.hypot(x1 - x0, y1 - y0) < STACK_AXIS_TOL and abs(z1 - z0 - gap) < Z_TOL
 
     named = goal_objects(goal, objects)
     env: dict[str, Any] = {phrase.replace(" ", "_"): name for phrase, name in named.items()

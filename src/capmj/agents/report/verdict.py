@@ -1,39 +1,36 @@
-"""A reporter's verdict: the :class:`Report`, how it is read from an answer (parsed with
-:mod:`ast`, never executed), and the two ways of asking for one that every reporter shares.
+"""A reporter's verdict: the :class:`Report`, the :class:`Answer` it is read from (parsed once, never
+executed), the :class:`Gate` an answer must pass, and the one loop every reporter runs.
 
-Every reporter tries hard to reach a verdict; the :class:`Report` says which step gave it
-(``source``):
+The loop (:func:`ask_for_verdict`): ask; read the answer (the reporter's own read: a literal
+verdict parsed, or checking code run in the sandbox); pass it through the reporter's gates; on a
+problem, one repair request in the same conversation quoting it; still a problem: the reporter's
+fallback.  The :class:`Report` says which step gave the verdict (``source``):
 
-1. ``code`` — the first answer (text: its checking code ran and set a bool ``judge``; vlm: its
-   code block assigns a literal bool);
-2. ``repair`` — one more request in the same conversation, with the error (and the failing line);
-3. ``direct`` — a structured question without code or images (``prompts/reporter_direct.txt``):
-   the object poses and the goal, answered as ``judge = True/False`` + ``reason`` (+ ``wrong``),
-   parsed with :mod:`ast`, never executed (:func:`direct_verdict`);
+1. ``code`` — the first answer;
+2. ``repair`` — the answer to the one repair request;
+3. ``direct`` — a fallback question without code or images (:func:`direct_verdict`:
+   ``prompts/reporter_direct.txt``, the object poses and the goal; or a reporter's own);
 4. ``unknown`` — none of these gave a bool.  What an unknown verdict does to the loop is the
    agent's ``on_unknown`` policy (:mod:`capmj.agents.llm_agent.agent`).
-
-The reporters themselves are :mod:`capmj.agents.report.text` (text), :mod:`capmj.agents.report.vlm`
-and :mod:`capmj.agents.report.checked`.
 """
 
 from __future__ import annotations
 
 import ast
+import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
-import numpy as np
-
+from capmj.agents.lmp.codeprep import named_calls
 from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.prompt_files import prompts_dir
-from capmj.agents.sandbox import extract_code, run_code
-from capmj.errors import ConfigError, PlanError, describe
+from capmj.agents.sandbox import extract_code
+from capmj.errors import ConfigError, PlanError
 
-__all__ = ["SOURCES", "CheckRun", "Report", "ask_verdict", "check", "direct_verdict", "parse_verdict", "parse_wrong",
-           "rerun_check", "scene_listing"]
+__all__ = ["SOURCES", "Answer", "Gate", "Reading", "Report", "ask_for_verdict", "direct_verdict", "gated", "names_of",
+           "parse_verdict", "parse_wrong", "record_reading", "scene_listing"]
 
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
@@ -54,9 +51,8 @@ class Report:
     errors: tuple[str, ...] = ()
     """Every problem met on the way, in order (``"code: ..."``, ``"repair: ..."``, ...)."""
     doubt: str | None = None
-    """Why the reporter itself doubts this verdict: a key of :data:`capmj.agents.report.confidence.LOW_CONFIDENCE`
-    (``copies_example``: the reason is the prompt's own example word for word; ``holds_at_start``: the
-    check also says "achieved" of the scene the robot started from)."""
+    """Why the reporter itself doubts this verdict: the key of the :class:`Gate` that kept it doubted
+    (a low-confidence reason of :mod:`capmj.agents.report.confidence`)."""
 
     def text(self) -> str:
         word = {True: "ACHIEVED", False: "NOT ACHIEVED", None: "UNKNOWN"}[self.verdict]
@@ -71,12 +67,79 @@ class Report:
 
 
 # ------------------------------------------------------------------------------------------------
-# verdict parsing
+# the answer, parsed once
 # ------------------------------------------------------------------------------------------------
 _NOT_LITERAL = object()
 
 
-def _literal_assignments(tree: ast.AST, name: str) -> list[Any]:
+@dataclass(frozen=True)
+class Answer:
+    """One answer of the model, parsed once: its code, the syntax tree of the whole code (None when
+    it has no code or does not parse), else the trees of its ``judge``/``reason``/``wrong`` lines
+    parsed one by one (a broken block still yields its verdict lines)."""
+
+    text: str
+    code: str | None
+    tree: ast.Module | None
+    lines: tuple[ast.Module, ...] = ()
+
+    @classmethod
+    def read(cls, text: str) -> Answer:
+        try:
+            code = extract_code(text)
+        except PlanError:
+            return cls(text, None, None)
+        try:
+            return cls(text, code, ast.parse(code))
+        except (SyntaxError, ValueError):
+            lines = []
+            for line in code.splitlines():
+                stripped = line.strip()
+                if stripped.startswith(("judge", "reason", "wrong")):
+                    try:
+                        lines.append(ast.parse(stripped))
+                    except (SyntaxError, ValueError):
+                        continue
+            return cls(text, code, None, tuple(lines))
+
+    @property
+    def trees(self) -> tuple[ast.Module, ...]:
+        return (self.tree,) if self.tree is not None else self.lines
+
+    def calls(self, name: str | None = None) -> Iterator[tuple[str, ast.Call]]:
+        """The calls of a bare name in the whole code (only those of ``name`` when given)."""
+        return named_calls(self.tree, name) if self.tree is not None else iter(())
+
+    def literals(self, name: str) -> list[Any]:
+        """The values of every ``name = <literal>`` assignment, nested ones too (a non-literal value
+        is an opaque marker)."""
+        return [v for tree in self.trees for v in _literals(tree, name)]
+
+    def verdict(self) -> tuple[bool | None, str, str | None]:
+        """``(judge, reason, problem)``: the verdict is known only when every literal ``judge``
+        assignment agrees on one bool."""
+        if self.code is None:
+            return None, "", "no code in the answer"
+        judges = self.literals("judge")
+        reason = next((r for r in reversed(self.literals("reason")) if isinstance(r, str)), "")
+        if not judges:
+            return None, reason, "the answer sets no 'judge'"
+        if any(not isinstance(j, bool) for j in judges):
+            return None, reason, "'judge' is not assigned a literal True or False"
+        if len(set(judges)) > 1:
+            return None, reason, "the answer sets 'judge' to both True and False"
+        return judges[0], reason, None
+
+    def wrong(self) -> tuple[str, ...]:
+        """The names of the last literal ``wrong = [...]`` (empty when there is none)."""
+        for tree in reversed(self.trees):
+            values = _literals(tree, "wrong")
+            if values:
+                return names_of(values[-1])
+        return ()
+
+
+def _literals(tree: ast.AST, name: str) -> list[Any]:
     values: list[Any] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign):
@@ -93,56 +156,14 @@ def _literal_assignments(tree: ast.AST, name: str) -> list[Any]:
     return values
 
 
-def _answer_trees(text: str) -> list[ast.AST] | None:
-    """Syntax trees of an answer's code: the whole block, else each ``judge``/``reason``/``wrong``
-    line on its own (a broken block still yields its verdict lines); None without code."""
-    try:
-        code = extract_code(text)
-    except PlanError:
-        return None
-    try:
-        return [ast.parse(code)]
-    except (SyntaxError, ValueError):
-        trees: list[ast.AST] = []
-        for line in code.splitlines():
-            stripped = line.strip()
-            if stripped.startswith(("judge", "reason", "wrong")):
-                try:
-                    trees.append(ast.parse(stripped))
-                except (SyntaxError, ValueError):
-                    continue
-        return trees
-
-
 def parse_verdict(text: str) -> tuple[bool | None, str, str | None]:
-    """``(judge, reason, problem)`` from a reporter answer.
-
-    The code block(s) of the answer are parsed with :mod:`ast` and every top-level or nested
-    ``judge = <literal>`` assignment is literal-evaluated; the verdict is known only when all of
-    them agree on one bool.  When the block does not parse as a whole, each line that assigns
-    ``judge``/``reason`` is parsed on its own.  Never executes anything.
-    """
-    trees = _answer_trees(text)
-    if trees is None:
-        return None, "", "no code in the answer"
-    judges = [v for t in trees for v in _literal_assignments(t, "judge")]
-    reasons = [v for t in trees for v in _literal_assignments(t, "reason")]
-    reason = next((r for r in reversed(reasons) if isinstance(r, str)), "")
-    if not judges:
-        return None, reason, "the answer sets no 'judge'"
-    if any(not isinstance(j, bool) for j in judges):
-        return None, reason, "'judge' is not assigned a literal True or False"
-    if len(set(judges)) > 1:
-        return None, reason, "the answer sets 'judge' to both True and False"
-    return judges[0], reason, None
+    """``(judge, reason, problem)`` of a reporter answer (:meth:`Answer.verdict`); never executes anything."""
+    return Answer.read(text).verdict()
 
 
 def parse_wrong(text: str) -> tuple[str, ...]:
     """The names of a literal ``wrong = [...]`` list in an answer (empty when there is none)."""
-    for tree in reversed(_answer_trees(text) or []):
-        for value in reversed(_literal_assignments(tree, "wrong")):
-            return names_of(value)
-    return ()
+    return Answer.read(text).wrong()
 
 
 def names_of(value: Any) -> tuple[str, ...]:
@@ -152,7 +173,105 @@ def names_of(value: Any) -> tuple[str, ...]:
     return ()
 
 
-def scene_listing(api: Any) -> str:
+# ------------------------------------------------------------------------------------------------
+# readings and gates
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Reading:
+    """What one answer gave: a verdict, or the problem the repair request quotes."""
+
+    verdict: bool | None
+    reason: str = ""
+    wrong: tuple[str, ...] = ()
+    problem: str | None = None
+    """None when the answer gave a bool verdict."""
+    doubt: str | None = None
+    """The key of the gate that kept this verdict doubted (becomes :attr:`Report.doubt`)."""
+
+
+S = TypeVar("S")
+
+
+@dataclass(frozen=True)
+class Gate(Generic[S]):
+    """A test an answer's reading must pass: a value with its key, its transcript label and its test.
+
+    ``test(subject)`` gives the problem (a sentence the repair request quotes) or None.  A problem
+    asks for the repair (``repairs``); after it, or at once when the gate never repairs, the verdict
+    is kept low-confidence under ``key`` (``keeps``), or the answer fails and the fallback decides."""
+
+    key: str
+    label: str | None
+    """The transcript entry its problem is recorded under (None: recorded by the test itself)."""
+    why: str
+    """Why a verdict it keeps is low-confidence (its line of the confidence reasons)."""
+    test: Callable[[S], str | None]
+    repairs: bool = True
+    keeps: bool = True
+
+
+def gated(session: LMPSession, call: LMPCall, gates: Sequence[Gate[S]], subject: S, reading: Reading,
+          last: bool) -> Reading:
+    """``reading`` through ``gates`` in order: the first that finds a problem decides (see :class:`Gate`)."""
+    for gate in gates:
+        problem = gate.test(subject)
+        if problem is None:
+            continue
+        if gate.label is not None:
+            session.record(call, gate.label, problem)
+        if gate.keeps and (last or not gate.repairs):
+            return dataclasses.replace(reading, doubt=gate.key)
+        return Reading(None, problem=problem)
+    return reading
+
+
+def record_reading(session: LMPSession, call: LMPCall, reading: Reading, label: str = "result") -> Reading:
+    """Record a verdict (under ``label``) or its problem (under ``error``, or ``<label> error``)."""
+    if reading.problem is not None:
+        session.record(call, "error" if label == "result" else f"{label} error", reading.problem)
+    else:
+        session.record(call, label, f"judge = {reading.verdict!r}\nreason = {reading.reason!r}\n"
+                                    f"wrong = {list(reading.wrong)!r}")
+    return reading
+
+
+def literal_reading(session: LMPSession, call: LMPCall, answer: Answer) -> Reading:
+    """The reading of an answer that states its verdict as literals (parsed, never run), recorded."""
+    judge, reason, problem = answer.verdict()
+    if problem is not None:
+        return record_reading(session, call, Reading(None, reason, problem=problem))
+    return record_reading(session, call, Reading(judge, reason, answer.wrong()))
+
+
+# ------------------------------------------------------------------------------------------------
+# the loop
+# ------------------------------------------------------------------------------------------------
+def ask_for_verdict(session: LMPSession, mode: str, messages: list[dict[str, Any]], *,
+                    call: Callable[[str], LMPCall], read: Callable[[LMPCall, Answer, bool], Reading],
+                    repair: Callable[[Answer, str], str], fallback: Callable[[tuple[str, ...]], Report],
+                    sampling: Callable[[str], Mapping[str, Any]] = lambda source: {}) -> Report:
+    """Ask → read → gates → one repair → fallback, the loop every reporter runs.
+
+    ``call(source)`` names the request of each round (``code``, ``repair``), sent with
+    ``sampling(source)``; ``read(call, answer, last)`` reads an answer and passes it through the
+    reporter's gates (``last``: no repair follows); ``repair(answer, problem)`` is the repair
+    request; ``fallback(errors)`` decides after two problems.  LLMError propagates: it ends the
+    episode's attempts."""
+    errors: tuple[str, ...] = ()
+    for source in ("code", "repair"):
+        asked = call(source)
+        answer = Answer.read(session.ask(asked, messages, **sampling(source)))
+        got = read(asked, answer, source == "repair")
+        if got.problem is None:
+            return Report(mode, got.verdict, got.reason, errors[-1] if errors else None, source, got.wrong, errors,
+                          got.doubt)
+        errors += (f"{source}: {got.problem}",)
+        messages = messages + [{"role": "assistant", "content": answer.text},
+                               {"role": "user", "content": repair(answer, got.problem)}]
+    return fallback(errors)
+
+
+def scene_listing(api: Mapping[str, Callable[..., Any]]) -> str:
     """One line per object: centre [x, y, z] (m) and tilt (degrees from upright)."""
     lines = []
     for name, (pos, rpy) in api["get_obj_pos_dict"]().items():
@@ -172,97 +291,8 @@ def direct_verdict(session: LMPSession, goal: str, mode: str, errors: tuple[str,
         raise ConfigError(f"direct reporter prompt {folder / 'reporter_direct.txt'} not found") from None
     call = session.next_call("reporter_direct", goal)
     prompt = template.replace("<<STATE>>", scene_listing(session.api)).replace("<<GOAL>>", " ".join(goal.split()))
-    text = session.ask(call, session.messages(prompt))
-    judge, reason, problem = parse_verdict(text)
-    if problem is not None:
-        session.record(call, "error", problem)
-        errors = errors + (f"direct: {problem}",)
-        return Report(mode, None, reason, problem, "unknown", (), errors)
-    wrong = parse_wrong(text)
-    session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-    return Report(mode, judge, reason, errors[-1] if errors else None, "direct", wrong, errors)
-
-
-def ask_verdict(session: LMPSession, mode: str, call_for: Callable[[str], LMPCall], messages: list[dict[str, Any]],
-                repair_hint: str) -> tuple[Report | None, tuple[str, ...]]:
-    """Ask for a verdict answer (``judge``, ``reason``, ``wrong``), with one repair round when it
-    gives none: ``(report, errors)``, ``report`` None when both rounds failed.  Shared by the
-    answer-only reporters (VLM, checked); ``call_for(source)`` names the call of each round.
-    LLMError propagates: it ends the episode's attempts."""
-    errors: tuple[str, ...] = ()
-    for source in ("code", "repair"):
-        call = call_for(source)
-        text = session.ask(call, messages)
-        judge, reason, problem = parse_verdict(text)
-        if problem is None:
-            wrong = parse_wrong(text)
-            session.record(call, "result", f"judge = {judge!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-            return Report(mode, judge, reason, errors[-1] if errors else None, source, wrong, errors), errors
-        session.record(call, "error", problem)
-        errors += (f"{source}: {problem}",)
-        messages = messages + [{"role": "assistant", "content": text},
-                               {"role": "user", "content": f"Your answer gave no verdict: {problem}. {repair_hint}"}]
-    return None, errors
-
-
-# ------------------------------------------------------------------------------------------------
-# verdicts computed by checking code (the text reporters that let the model write code)
-# ------------------------------------------------------------------------------------------------
-def _failing_line(exc: PlanError, code: str) -> str:
-    """A new line quoting ``line N: <source>`` of ``code`` when the error has a line, else ``""``."""
-    lines = code.splitlines()
-    if exc.line is None or not 1 <= exc.line <= len(lines):
-        return ""
-    return f"\n    line {exc.line}: {lines[exc.line - 1].strip()}"
-
-
-@dataclass(frozen=True)
-class CheckRun:
-    """One run of model-written checking code: its verdict, or the problem that stopped it."""
-
-    verdict: bool | None
-    reason: str = ""
-    wrong: tuple[str, ...] = ()
-    problem: str | None = None
-    """None when the code set a bool ``judge``."""
-    code: str = ""
-    """The code as run (after :meth:`LMPSession.prepare`): what :func:`rerun_check` runs again."""
-    doubt: str | None = None
-    """Why the reporter doubts this run's verdict (becomes :attr:`Report.doubt`)."""
-
-
-def check(session: LMPSession, call: LMPCall, text: str, env: dict[str, Any], filename: str) -> CheckRun:
-    """The :class:`CheckRun` of the checking code in ``text``, run in the sandbox with ``env``."""
-    code = ""
-    try:
-        code = extract_code(text)
-        code = session.prepare(code, env, parent=call)
-        session.record(call, "code", code)
-    except PlanError as exc:
-        problem = f"{describe(exc)}{_failing_line(exc, code)}"
-        session.record(call, "error", problem)
-        return CheckRun(None, problem=problem, code=code)
-    return rerun_check(session, call, code, env, filename, "result")
-
-
-def rerun_check(session: LMPSession, call: LMPCall, code: str, env: dict[str, Any], filename: str,
-                label: str) -> CheckRun:
-    """Run prepared checking ``code`` with ``env``; the outcome is recorded under ``label``
-    (``result``; a problem under ``error``, or ``<label> error`` for another label)."""
-    failed = "error" if label == "result" else f"{label} error"
-    try:
-        ns = run_code(code, env, budget=session.lmp_budget, filename=filename)
-    except PlanError as exc:
-        problem = f"{describe(exc)}{_failing_line(exc, code)}"
-        session.record(call, failed, problem)
-        return CheckRun(None, problem=problem, code=code)
-    judge, reason = ns.get("judge"), ns.get("reason")
-    reason = reason if isinstance(reason, str) else ""
-    if not isinstance(judge, (bool, np.bool_)):
-        problem = ("the code did not set 'judge'" if "judge" not in ns
-                   else f"'judge' is {type(judge).__name__} {str(judge)[:80]!r}, not True or False")
-        session.record(call, failed, problem)
-        return CheckRun(None, reason, problem=problem, code=code)
-    wrong = names_of(ns.get("wrong"))
-    session.record(call, label, f"judge = {bool(judge)!r}\nreason = {reason!r}\nwrong = {list(wrong)!r}")
-    return CheckRun(bool(judge), reason, wrong, None, code)
+    got = literal_reading(session, call, Answer.read(session.ask(call, session.messages(prompt))))
+    if got.problem is not None:
+        errors = errors + (f"direct: {got.problem}",)
+        return Report(mode, None, got.reason, got.problem, "unknown", (), errors)
+    return Report(mode, got.verdict, got.reason, errors[-1] if errors else None, "direct", got.wrong, errors)

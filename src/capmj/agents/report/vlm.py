@@ -2,9 +2,10 @@
 FRONT camera plus the final depth as a *visible* colour map (the original converted metric depth
 to 8-bit integers, i.e. an almost black image) and answers with a code block setting ``judge``.
 The verdict is read by parsing that code and literal-evaluating the assignment
-(:func:`capmj.agents.report.verdict.parse_verdict`; the original searched the answer for the substring
-"True", so "not True" counted as success).  No renderer, or no verdict after one repair: the
-direct verdict takes over.
+(:class:`capmj.agents.report.verdict.Answer`; the original searched the answer for the substring
+"True", so "not True" counted as success), in the reporters' one loop
+(:func:`~capmj.agents.report.verdict.ask_for_verdict`).  No renderer, or no verdict after one
+repair: the direct verdict takes over.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import load_system_prompt, prompts_dir
-from capmj.agents.report.verdict import Report, ask_verdict, direct_verdict
+from capmj.agents.report.verdict import Report, ask_for_verdict, direct_verdict, literal_reading
 from capmj.errors import CapmjError, ConfigError, describe
 
 
@@ -99,12 +100,14 @@ class VLMReporter:
         ]
         messages: list[dict[str, Any]] = [{"role": "system", "content": load_system_prompt(folder)},
                                           {"role": "user", "content": content}]
-        first = call
-        report, errors = ask_verdict(
-            session, self.mode, lambda source: first if source == "code" else session.next_call("vlm_reporter", goal),
-            messages, "Answer only with one ```python block that sets judge = True or False and reason = a short "
-            "explanation.")
-        return report if report is not None else direct_verdict(session, goal, self.mode, errors)
+        return ask_for_verdict(
+            session, self.mode, messages,
+            call=lambda source: call if source == "code" else session.next_call("vlm_reporter", goal),
+            read=lambda asked, answer, last: literal_reading(session, asked, answer),
+            repair=lambda answer, problem: (
+                f"Your answer gave no verdict: {problem}. Answer only with one ```python block that sets judge = True "
+                "or False and reason = a short explanation."),
+            fallback=lambda errors: direct_verdict(session, goal, self.mode, errors))
 
     def close(self) -> None:
         if self._rig is not None:

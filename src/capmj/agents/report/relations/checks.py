@@ -8,7 +8,7 @@ verdict is "achieved" exactly when no call failed, and ``wrong`` is the union of
 
 The relations are generic to tabletop goals (inside, outside, one stack, layers, on the table,
 unmoved, a circle, a row, alternating colours, a count, distinct colours); each is measured from
-the records of :mod:`capmj.agents.report.scene_records` with the tasks' own tolerances
+the records of :mod:`capmj.agents.report.scene` with the tasks' own tolerances
 (:mod:`capmj.tasks.predicates`), as the records themselves are.  No call knows any task.
 
 :func:`relation_env` builds the names a check may use for one scene: the selectors of
@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from capmj.agents.report.relations.picks import SELECTORS, Picks, Record, short
-from capmj.agents.report.scene_facts import AREAS
+from capmj.agents.report.scene import AREAS
 from capmj.tasks.predicates import CENTRE_TOL, CIRCLE_TOL, ROW_LINE_TOL, fit_circle
 from capmj.tasks.predicates.tolerances import MOVE_TOL
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from capmj.agents.report.scene_facts import AREAS
+from capmj.agents.report.scene import AREAS
 from capmj.errors import CheckArgumentError
 from capmj.sim.palette import COOL, WARM
 
@@ -161,7 +161,7 @@ class Picks:
                  and (size is None or r["size"] == SIZE_WORDS[size]) and (start_area is None or r["start_area"] == start_area)]
         if not found and every and (colors is not None or size is not None or start_area is not None):
             # legitimate in a loop over bowls (a distractor's colour), but also a place's colour read as the
-            # blocks' (a literal one is caught first by relations.grounding): kept for the repair request of a
+            # blocks' (a literal one is caught first by the ungrounded gate): kept for the repair request of a
             # check that tests nothing
             self.empty_picks.append(
                 f"blocks(color={color!r}, size={size!r}, start_area={start_area!r}) picks no block: the blocks here "

@@ -5,49 +5,41 @@ The question holds only the goal and the inventory (the keys acting cannot chang
 is written before the result is seen.  The answer is calls such as
 ``require_inside(blocks(color="red"), zone("green"))`` (:mod:`capmj.agents.report.relations.checks`);
 the verdict is "achieved" exactly when no call failed, and ``wrong`` is the objects the failed
-calls name, so a "not achieved" always names movable objects.  The prompt is
-``prompts/reporter_relations.py``.
+calls name.  The prompt is ``prompts/reporter_relations.py``.
 
-Each answer gets one repair request when it tests nothing or cannot be right.  The gates run in
-this order, and the first that finds a problem decides:
-
-* it calls a name the prompt does not define (:class:`~capmj.errors.UnknownCheckError`, naming the
-  valid ones; never a function written by ``parse_function``) or no ``require_*`` at all
-  (:data:`BLIND`).  Still so after the repair: the ``checked`` question as ``direct``
-  (:class:`~capmj.agents.report.records.RecordsReporter`);
-* a group required as one tower and in layers of several is read as layers, the tower asking only
-  for its place (:data:`LAYERED`): not a problem, a reading;
-* its calls contradict each other, so no scene could pass them (:data:`IMPOSSIBLE`,
-  :meth:`~capmj.agents.report.relations.checks.Failures.impossible`): ``impossible_check``;
-* it picks a block colour or a count the goal does not give
-  (:func:`~capmj.agents.report.relations.grounding.ungrounded`): ``ungrounded_literal``;
-* its calls all pass on the start scene (:data:`HOLDS_AT_START`, with the first pick that found no
-  block): ``holds_at_start``;
-* it never asks for a relation the goal names
-  (:func:`~capmj.agents.report.relations.coverage.uncovered`): ``misses_a_relation``.
-
-Still so after the repair, the last four keep their verdict, low-confidence under their key.  Why
-each gate exists: ``docs/judge.md``, "Why each gate exists".
+It runs the reporters' one loop (:func:`~capmj.agents.report.verdict.ask_for_verdict`).  An answer
+that calls a name the prompt does not define (:class:`~capmj.errors.UnknownCheckError`, naming the
+valid ones) or fails to run gets the repair request; so does one that fails a gate, in this order:
+:data:`BLIND_GATE` (before the run), then :data:`GATES` (``impossible_check``,
+``ungrounded_literal``, ``holds_at_start``, ``misses_a_relation``).  A group required as one tower
+and in layers of several is read as layers (:data:`LAYERED`, a reading, not a problem).  After the
+repair, a blind answer or one that fails to run goes to the ``checked`` question as ``direct``;
+the other gates keep its verdict, low-confidence under their key.  Why each gate exists:
+``docs/judge.md``, "Why each gate exists".
 """
 
 from __future__ import annotations
 
 import ast
 import dataclasses
+import re
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
-from capmj.agents.lmp.codeprep import named_calls, undefined_calls
+from capmj.agents.lmp.codeprep import undefined_calls
 from capmj.agents.lmp.session import LMPCall, LMPSession
+from capmj.agents.report.checked import CheckedReporter
 from capmj.agents.report.relations.checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
-from capmj.agents.report.relations.coverage import uncovered
-from capmj.agents.report.relations.grounding import ungrounded
-from capmj.agents.report.records import RecordsReporter
-from capmj.agents.sandbox import extract_code, run_code
-from capmj.agents.report.scene_records import INVENTORY_KEYS, records, records_text
-from capmj.agents.report.verdict import CheckRun
+from capmj.agents.report.scene import INVENTORY_KEYS, records, records_text, start_areas_of, state_from_api
+from capmj.agents.report.verdict import Answer, Gate, Reading, Report, ask_for_verdict, gated, record_reading
+from capmj.agents.sandbox import run_code
 from capmj.errors import PlanError, UnknownCheckError, describe
+from capmj.llm.provider import derived_seed
+from capmj.sim.state import SceneState
 
-__all__ = ["BLIND", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "RelationsReporter"]
+__all__ = ["BLIND", "BLIND_GATE", "COVERAGE", "GATES", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "Ran",
+           "RelationsReporter", "goal_numbers", "uncovered", "ungrounded"]
 
 PROMPT = "reporter_relations"
 """The prompt file (``prompts/reporter_relations.py``) and the LMP name in transcripts."""
@@ -61,75 +53,262 @@ HOLDS_AT_START = ("every require_... call passes in the scene the robot started 
 
 LAYERED = ("require_stack of objects also required in layers of several is read as their place only: "
            "a structure with several blocks in a layer is require_layers")
-"""The transcript note when a tower call is read as its place (:meth:`~capmj.agents.report.relations.checks.Failures.layered_towers`)."""
+"""The transcript note when a tower call is read as its place (:meth:`Failures.layered_towers`)."""
 
 IMPOSSIBLE = "no arrangement of the objects could pass every require_... call, so it says \"not achieved\" of every scene"
 """The start of the problem the repair request states when the calls contradict each other."""
 
+COPIED_RECORDS_HINT = ("# `objects` is already defined with the records above: do not write it out again. "
+                       "Start with the first line of the check.\n")
+"""Added to the repair request when the failed answer began by assigning ``objects``."""
+_COPIES_RECORDS = re.compile(r"\A\s*(?:```[A-Za-z]*\s*)?objects\s*=")
 
-def calls_a_check(code: str) -> bool:
-    """Whether ``code`` calls one of :data:`~capmj.agents.report.relations.checks.CHECKS` (read with :mod:`ast`)."""
-    try:
-        tree = ast.parse(code)
-    except SyntaxError:
-        return True  # the sandbox reports it
-    return any(name in CHECKS for name, _ in named_calls(tree))
+REPAIR_TEMPERATURE = 0.7
+"""Sampling temperature of the repair request (the first request uses the client's), with a seed
+derived from the question: it can differ from the failed answer and still be repeated."""
 
 
-class RelationsReporter(RecordsReporter):
+# ------------------------------------------------------------------------------------------------
+# what an answer's text leaves out or takes from nowhere (read from its tree, no task knowledge)
+# ------------------------------------------------------------------------------------------------
+PLACED = ("require_inside", "require_outside", "require_count")
+"""Checks that say where objects must (not) be; ``require_stack(objs, place)`` does too."""
+
+KEEP = "add one of {checks} to the calls the goal needs (keep the others)"
+"""The advice of a repair request for a relation left out."""
+
+COVERAGE: tuple[tuple[str, str, tuple[str, ...], str], ...] = (
+    (r"\bstack", "a stack", ("require_stack", "require_layers"), KEEP),
+    (r"\b(?:structure|layer)s?\b", "layers (a structure has several blocks in a layer; a tower is one column)",
+     ("require_layers",), "write require_layers(objs, [n1, n2, ...]) with the number of blocks in each layer from the "
+                          "table up, instead of require_stack"),
+    (r"\b(?:circle|ring)s?\b", "a circle", ("require_circle",), KEEP),
+    (r"\balternat", "alternating colours", ("require_alternating",), KEEP),
+    (r"\b(?:in|on|into|onto)\s+(?:the|a|an|each|every)\s+(?:[a-z]+\s+){0,2}?(?:zone|bowl)s?\b",
+     "where the objects must be (a zone or bowl)", PLACED, KEEP),
+)
+"""(goal pattern, what it asks for, the checks any one of which asks for it, the advice): a goal that
+says "stack" asks for a stack or layers, "structure" or "layer" for layers (the prompt's own words
+for ``require_layers``), "circle" or "ring" for a circle, "alternat..." for alternating colours,
+"in/on/into the ... zone/bowl" for where the objects must be."""
+
+PLACE_NOUNS = ("zone", "zones", "bowl", "bowls", "area", "areas")
+"""Nouns after which a colour word names a place, not blocks."""
+NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven",
+                "twelve")
+"""Number words a goal may spell out, by value."""
+_NOT_COLOURS = frozenset({"warm", "cool", "big", "bigger", "large", "small", "smaller", "tiny"})
+
+
+def _answer(code: Answer | str) -> Answer:
+    return code if isinstance(code, Answer) else Answer.read(code)
+
+
+def uncovered(code: Answer | str, goal: str) -> str | None:
+    """Which relation the goal names and the check never asks for (a sentence for the repair request), or
+    None (also when the code does not parse: the sandbox reports it)."""
+    answer = _answer(code)
+    if answer.tree is None:
+        return None
+    asked: set[str] = set()
+    for name, call in answer.calls():
+        asked.add(name)
+        if name == "require_stack" and (len(call.args) > 1 or any(k.arg == "place" for k in call.keywords)):
+            asked.add(PLACED[0])
+    text = goal.lower()
+    for pattern, relation, checks, advice in COVERAGE:
+        found = re.search(pattern, text)
+        if found and not asked & set(checks):
+            return (f'the goal says "{found.group(0)}", but no call asks for {relation}: '
+                    + advice.format(checks=", ".join(checks)))
+    return None
+
+
+def goal_numbers(goal: str) -> set[int]:
+    """The numbers a goal says, in digits or spelled out ("2*2*2" → 2; "two" → 2), with 0 and 1 ("no other
+    block", "a block"), which a goal need not spell."""
+    words = re.findall(r"[a-z]+|\d+", goal.lower())
+    return ({0, 1} | {int(w) for w in words if w.isdigit()}
+            | {NUMBER_WORDS.index(w) for w in words if w in NUMBER_WORDS})
+
+
+def _strings(node: ast.AST | None) -> list[str]:
+    """The string constants of a literal colour argument (one string, or a list/tuple of them)."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return [node.value]
+    if isinstance(node, (ast.List, ast.Tuple)):
+        return [e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
+    return []
+
+
+def _argument(call: ast.Call, position: int, keyword: str) -> ast.AST | None:
+    for kw in call.keywords:
+        if kw.arg == keyword:
+            return kw.value
+    return call.args[position] if len(call.args) > position else None
+
+
+def ungrounded(code: Answer | str, goal: str, rows: Iterable[Mapping[str, Any]]) -> str | None:
+    """Why the check uses a literal the goal does not give (a sentence for the repair request), or None.
+
+    A check may use what the goal says and what it computes from the objects, nothing else: a block
+    colour the goal uses only to name a place ("the orange zone"); a block colour the goal never
+    says, when the scene has blocks of colours the literal does not list (one that lists every block
+    colour picks them all) and no zone or bowl has it (a place's colour is the "matching colour"
+    reading); a count in ``require_count`` that is not a number of the goal.  ``rows``: the scene's
+    records (for the colours its blocks have)."""
+    answer = _answer(code)
+    if answer.tree is None:
+        return None  # the sandbox reports it
+    words = re.findall(r"[a-z]+", goal.lower())
+    rows = list(rows)
+    block_colours = {r["color"] for r in rows if r.get("kind") == "block"}
+    place_colours = {r["color"] for r in rows if r.get("kind") in ("zone", "bowl")}
+    for _, call in answer.calls("blocks"):
+        arg = _argument(call, 0, "color")
+        colours = _strings(arg) if arg is not None else []
+        picked = set(colours)
+        for colour in colours:  # in the answer's order: the repair request must not vary between runs
+            if colour.lower() in _NOT_COLOURS:
+                continue
+            said = [i for i, w in enumerate(words) if w == colour.lower()]
+            if said and all(i + 1 < len(words) and words[i + 1] in PLACE_NOUNS for i in said):
+                noun = words[said[0] + 1]
+                return (f'blocks(color="{colour}") picks {colour} blocks, but in the goal "{colour}" names the '
+                        f'{colour} {noun}, not the blocks: pick the blocks the goal means (all of them: blocks())')
+            if not said and block_colours - picked and colour not in place_colours:
+                return (f'blocks(color="{colour}") picks {colour} blocks, but the goal names no colour "{colour}": '
+                        "when the goal means a colour chosen by a property (the same colour as a place, the commonest "
+                        'colour ...), compute it from the objects, e.g. from [b["color"] for b in blocks()]')
+    numbers = goal_numbers(goal)
+    for _, call in answer.calls("require_count"):
+        n = _argument(call, 2, "n")
+        if isinstance(n, ast.Constant) and isinstance(n.value, int) and n.value not in numbers:
+            return (f"require_count(..., {n.value}) asks for {n.value} objects, but the goal says no number "
+                    f"{n.value}: compute the count from the objects (e.g. with len(...)) or use the goal's numbers")
+    return None
+
+
+# ------------------------------------------------------------------------------------------------
+# the gates
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Ran:
+    """An answer's check as run on the final scene: what :data:`GATES` read."""
+
+    answer: Answer
+    goal: str
+    rows: list[dict[str, Any]]
+    """The final scene's records."""
+    asked: Failures
+    """What its calls asked for, and what failed."""
+    at_start: Callable[[], bool | None]
+    """Its verdict on the start scene (run when asked; None: no start scene or the run failed)."""
+
+
+def _impossible(ran: Ran) -> str | None:
+    found = ran.asked.impossible()
+    return f"{IMPOSSIBLE}: {found}" if found is not None else None
+
+
+def _holds_at_start(ran: Ran) -> str | None:
+    return HOLDS_AT_START + "".join(f"; {pick}" for pick in ran.asked.empty_picks[:1]) if ran.at_start() else None
+
+
+BLIND_GATE: Gate[Answer] = Gate(
+    "blind", "blind", "its check calls none of the require_... checks",
+    lambda answer: None if any(name in CHECKS for name, _ in answer.calls()) or answer.tree is None else BLIND,
+    keeps=False)
+"""An answer that makes no ``require_*`` call tests nothing (tried before the run; an answer that does
+not parse is the sandbox's to report)."""
+
+GATES: tuple[Gate[Ran], ...] = (
+    Gate("impossible_check", "impossible",
+         "its check asks for relations no scene can satisfy together (relations prompt)", _impossible),
+    Gate("ungrounded_literal", "ungrounded",
+         "its check picks a block colour or a count the goal does not give (relations prompt)",
+         lambda ran: ungrounded(ran.answer, ran.goal, ran.rows)),
+    Gate("holds_at_start", None, "its check also says the goal holds in the scene the robot started from",
+         _holds_at_start),
+    Gate("misses_a_relation", "uncovered", "its check never asks for a relation the goal names (relations prompt)",
+         lambda ran: uncovered(ran.answer, ran.goal)),
+)
+"""The gates of a check that ran, in the order they are tried: calls no scene can pass together
+(:meth:`Failures.impossible`), a literal the goal does not give (:func:`ungrounded`), every call
+passing on the start scene (its run's transcript entries say it), a relation the goal names left
+out (:func:`uncovered`)."""
+
+
+def _vet(code: str) -> None:
+    """UnknownCheckError for a call of a name the prompt does not define (never written by ``parse_function``)."""
+    missing = [m[0] for m in undefined_calls(code, set(NAMES))]
+    if missing:
+        raise UnknownCheckError(f"{', '.join(missing)} is not defined; the checks are {', '.join(CHECKS)} "
+                                f"and the selectors {', '.join(SELECTORS)}")
+
+
+class RelationsReporter:
     """``--reporter-prompt relations``: the goal as calls of pre-bound relation checks (see the module docstring)."""
 
+    mode = "text"
     prompt = "relations"
-    prompt_file = PROMPT
+    gates: tuple[Gate[Any], ...] = (BLIND_GATE, *GATES)
 
-    def question(self, session: LMPSession, ctx: Any, goal: str) -> str:
-        """The scene's inventory (the keys acting cannot change) and the goal."""
-        inventory = records_text(self._records(session, ctx), INVENTORY_KEYS)
-        return f"# The objects of this scene.\n{inventory}\n# goal: {' '.join(goal.split())}"
+    def __init__(self, prompt_directory: Any = None) -> None:
+        self._start: dict[int, str] = {}
+        self._start_state: SceneState | None = None
+        self._fallback = CheckedReporter(prompt_directory)
 
-    def repair_request(self, goal: str) -> str:
-        return (f"# Write the corrected complete check for the same goal: only calls of {', '.join(CHECKS)} "
-                f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {' '.join(goal.split())}\n")
+    def start(self, ctx: Any) -> None:
+        """Remember the start scene and the quarter each object starts in (the ``start_area`` of its record).
+
+        Read from the simulator's initial state, as the episode's own start is known to any
+        observer of it; in ``--perception rgbd`` mode this one fact is not perceived."""
+        self._start_state = ctx.world.state()
+        self._start = start_areas_of({o.obj_id: pose.pos for o, pose in self._start_state})
+
+    def _records(self, session: LMPSession, ctx: Any) -> list[dict[str, Any]]:
+        return records(state_from_api(session.api, ctx.world.objects), self._start)
+
+    def judge(self, session: LMPSession, ctx: Any, goal: str) -> Report:
+        said = " ".join(goal.split())
+        question = f"# The objects of this scene.\n{records_text(self._records(session, ctx), INVENTORY_KEYS)}\n# goal: {said}"
+        repair = (f"# Write the corrected complete check for the same goal: only calls of {', '.join(CHECKS)} "
+                  f"on objects picked with {', '.join(SELECTORS)}. Do not set judge.\n# goal: {said}\n")
+        warm = {"temperature": REPAIR_TEMPERATURE, "seed": derived_seed(f"capmj-records-repair/{question}")}
+        return ask_for_verdict(
+            session, self.mode, session.messages(session.prompt(PROMPT).render(question)),
+            call=lambda source: session.next_call(PROMPT, goal),
+            read=lambda call, answer, last: self._read(session, ctx, goal, call, answer, last),
+            repair=lambda answer, problem: (f"# The checking code above failed: {problem}\n"
+                                            f"{COPIED_RECORDS_HINT if _COPIES_RECORDS.match(answer.text) else ''}{repair}"),
+            fallback=lambda errors: self._direct(session, ctx, goal, errors),
+            sampling=lambda source: warm if source == "repair" else {})
 
     def _run(self, session: LMPSession, call: LMPCall, code: str, rows: list[dict[str, Any]],
              start: list[dict[str, Any]] | None, scene: str, label: str,
-             layered: frozenset[frozenset[str]] = frozenset()) -> tuple[CheckRun, Failures | None]:
+             layered: frozenset[frozenset[str]] = frozenset()) -> tuple[Reading, Failures | None]:
         """Run prepared ``code`` on one scene's records (``start``: the start scene's, for ``require_unmoved``;
         ``layered``: see :func:`relation_env`): the verdict is that no required relation failed, and what its
         calls asked for (None when it failed to run)."""
         env, failures = relation_env(rows, start, layered)
-        failed = "error" if label == "result" else f"{label} error"
         try:
-            run_code(code, env, budget=session.lmp_budget,
-                     filename=f"<{self.prompt_file} {session.attempt}.{call.n}{scene}>")
+            run_code(code, env, budget=session.lmp_budget, filename=f"<{PROMPT} {session.attempt}.{call.n}{scene}>")
         except PlanError as exc:
-            problem = describe(exc)
-            session.record(call, failed, problem)
-            return CheckRun(None, problem=problem, code=code), None
-        verdict = not failures.items
-        session.record(call, label, f"judge = {verdict!r}\nreason = {failures.reason!r}\nwrong = {list(failures.wrong)!r}")
-        return CheckRun(verdict, failures.reason, failures.wrong, None, code), failures
+            return record_reading(session, call, Reading(None, problem=describe(exc)), label), None
+        return record_reading(session, call, Reading(not failures.items, failures.reason, failures.wrong), label), failures
 
-    def _check(self, session: LMPSession, call: LMPCall, text: str, ctx: Any, goal: str, last: bool) -> CheckRun:
+    def _read(self, session: LMPSession, ctx: Any, goal: str, call: LMPCall, answer: Answer, last: bool) -> Reading:
+        """The answer's check run on the final scene, through the gates (``last``: no repair follows)."""
         rows = self._records(session, ctx)
         start = records(self._start_state, self._start) if self._start_state is not None else None
-        known = set(NAMES)
-        code = ""
         try:
-            code = extract_code(text)
-            missing = [m[0] for m in undefined_calls(code, known)]
-            if missing:
-                raise UnknownCheckError(f"{', '.join(missing)} is not defined; the checks are {', '.join(CHECKS)} "
-                                        f"and the selectors {', '.join(SELECTORS)}")
-            code = session.prepare(code, dict.fromkeys(known), parent=call)  # drops benign imports only
-            session.record(call, "code", code)
+            code = session.prepare_answer(call, answer.text, dict.fromkeys(NAMES), vet=_vet)  # drops benign imports only
         except PlanError as exc:
-            problem = describe(exc)
-            session.record(call, "error", problem)
-            return CheckRun(None, problem=problem, code=code)
-        if not calls_a_check(code):
-            session.record(call, "blind", BLIND)
-            return CheckRun(None, problem=BLIND, code=code)
+            return record_reading(session, call, Reading(None, problem=describe(exc)))
+        blind = gated(session, call, (BLIND_GATE,), answer, Reading(None), last)
+        if blind.problem is not None:
+            return blind
         run, asked = self._run(session, call, code, rows, start, "", "result")
         layered = asked.layered_towers() if asked is not None else frozenset()
         if layered:
@@ -138,24 +317,18 @@ class RelationsReporter(RecordsReporter):
         if run.problem is not None or asked is None:
             return run
 
-        def doubted(key: str, problem: str, label: str | None) -> CheckRun:
-            """A check that cannot be right: its problem for the repair request, or after the repair its
-            verdict, kept low-confidence (``key``); ``label``: the transcript entry (None: its run's says it)."""
-            if label is not None:
-                session.record(call, label, problem)
-            return dataclasses.replace(run, doubt=key) if last else CheckRun(None, problem=problem, code=code)
+        def at_start() -> bool | None:
+            return start is not None and self._run(session, call, code, start, start, " start", "start scene",
+                                                   layered)[0].verdict
 
-        impossible = asked.impossible()
-        if impossible is not None:
-            return doubted("impossible_check", f"{IMPOSSIBLE}: {impossible}", "impossible")
-        guessed = ungrounded(code, goal, rows)
-        if guessed is not None:
-            return doubted("ungrounded_literal", guessed, "ungrounded")
-        if start is not None and self._run(session, call, code, start, start, " start", "start scene",
-                                           layered)[0].verdict:
-            return doubted("holds_at_start", HOLDS_AT_START + "".join(f"; {pick}" for pick in asked.empty_picks[:1]),
-                           None)
-        unasked = uncovered(code, goal)
-        if unasked is not None:
-            return doubted("misses_a_relation", unasked, "uncovered")
-        return run
+        return gated(session, call, GATES, Ran(answer, goal, rows, asked, at_start), run, last)
+
+    def _direct(self, session: LMPSession, ctx: Any, goal: str, errors: tuple[str, ...]) -> Report:
+        """The ``checked`` question after two failed checks: its verdict, as source ``direct``."""
+        report = self._fallback.judge(session, ctx, goal)
+        errors += tuple(f"direct {e}" for e in report.errors)
+        source = "unknown" if report.verdict is None else "direct"
+        return dataclasses.replace(report, source=source, errors=errors, error=errors[-1])
+
+    def close(self) -> None:
+        return None

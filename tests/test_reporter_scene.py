@@ -1,28 +1,20 @@
-"""The ``records`` reporter prompt (issue #26 item 3): capmj binds the measured facts as Python
-records, the model's checking code runs over them in the sandbox.
-
-The records are checked on real settled MuJoCo states of the judge set; the reporter's answers come
-from the scripted local HTTP server (tests/llm_stub_server.py): fixtures that read the prompt, not
-results.
+"""The measured scene the reporters judge (:mod:`capmj.agents.report.scene`) and the ``relations``
+reporter's repair and fallback: records on real settled MuJoCo states of the judge set; answers from
+the scripted local HTTP server (tests/llm_stub_server.py): fixtures that read the prompt, not results.
 """
 
 from __future__ import annotations
 
 import ast
 import json
-import re
 from pathlib import Path
 from typing import Any
 
-import pytest
 from llm_stub_server import StubLLMServer, prompt_text
 
-from capmj.agents.choices import REPORTER_PROMPTS
 from capmj.agents.prompt_files import load_prompt
-from capmj.agents.report.registry import make_reporter
-from capmj.agents.report.records import PROMPT, REPAIR_TEMPERATURE, RecordsReporter
-from capmj.agents.report.scene_facts import area_of
-from capmj.agents.report.scene_records import RECORD_KEYS, records, records_text
+from capmj.agents.report.relations.reporter import PROMPT, REPAIR_TEMPERATURE
+from capmj.agents.report.scene import area_of, records, records_text, start_areas_of
 from capmj.bench.cli import main
 from capmj.judge.cases import JudgeCase, Stage
 from capmj.judge.judgeset import build_cases
@@ -78,28 +70,10 @@ def test_levels_count_the_blocks_below() -> None:
     assert len(top["below"]) == 4 and all(next(r for r in rows if r["name"] == n)["level"] == 2 for n in top["below"])
 
 
-def test_the_prompt_documents_every_record_key_and_stops_before_another_example() -> None:
-    prompt = load_prompt(PROMPT)
-    documented = re.findall(r'^#\s+"(\w+)"', prompt.render(""), re.M)
-    documented += re.findall(r';\s+"(\w+)":', prompt.render(""))
-    assert sorted(documented) == sorted(RECORD_KEYS)
-    assert "\n\n# example goal" in prompt.stop
-    assert REPORTER_PROMPTS == ("thesis", "checked", "records", "goalcheck", "relations")
-    assert isinstance(make_reporter("text", None, "records"), RecordsReporter)
-
-
-MATCHING_BOWL_CHECK = """
-blocks = [o for o in objects if o["kind"] == "block"]
-wrong = [b["name"] for b in blocks if b["color"] != b["inside_color"]]
-judge = len(wrong) == 0
-reason = "blocks outside a bowl of their colour: " + ", ".join(wrong)
-"""
-
-
 def judge(tmp_path: Path, server: StubLLMServer, *extra: str) -> tuple[int, dict[str, Any], list[dict[str, Any]]]:
     out = tmp_path / "out"
     rc = main(["judge", "--tasks", BOWLS, "--seeds", str(SEED), "--out", str(out), "--no-progress", "--reporter",
-               "text", "--reporter-prompt", "records", "--model", "openai/stub", "--api-base", server.base_url,
+               "text", "--reporter-prompt", "relations", "--model", "openai/stub", "--api-base", server.base_url,
                "--llm-timeout", "10", *extra])
     if rc != 0:
         return rc, {}, []
@@ -107,33 +81,10 @@ def judge(tmp_path: Path, server: StubLLMServer, *extra: str) -> tuple[int, dict
             [json.loads(line) for line in (out / "judged.jsonl").read_text().splitlines()])
 
 
-def test_checking_code_over_the_records_runs_in_the_sandbox_and_gives_the_verdict(server: StubLLMServer,
-                                                                                 tmp_path: Path) -> None:
-    """A correct check of this task's goal, written once against the documented keys, agrees with
-    the task predicate on every state of the set, and names exactly the blocks the state breaks."""
-    prompts: list[str] = []
-
-    def answer(request: dict[str, Any]) -> str:
-        text = prompt_text(request)
-        assert "objects = [\n    {'name': " in text and "# goal: Put the blocks in the bowls" in text
-        prompts.append(text)
-        return code(MATCHING_BOWL_CHECK)
-
-    server.respond_with(answer)
-    rc, s, judged = judge(tmp_path, server, "--kinds", "oracle,displaced,wrong_bowl,near_inside,near_outside")
-    assert rc == 0 and s["reporter_prompt"] == "records" and len(judged) >= 4
-    assert len(prompts) == len(judged)  # one request per state
-    for r in judged:
-        assert r["source"] == "code" and r["verdict"] == r["label"], r
-        assert (r["wrong"] == []) == r["label"] and r["confidence"] == "high", r
-    assert s["overall"]["balanced_accuracy"] == 1.0
-    assert any(not r["label"] for r in judged)
-
-
-def test_failing_or_hostile_code_gets_one_repair_then_the_checked_question(server: StubLLMServer,
-                                                                           tmp_path: Path) -> None:
+def test_failing_or_hostile_code_gets_one_warm_repair_then_the_checked_question(server: StubLLMServer,
+                                                                                tmp_path: Path) -> None:
     """Two failed checks: the ``checked`` question (facts, a literal answer) gives the verdict, as ``direct``."""
-    answers = iter([code("import os\njudge = os.system('true') == 0"), code("judge = objects[99]['tilted']"),
+    answers = iter([code("import os\nrequire_on_table(blocks())"), code("require_on_table(objects[99])"),
                     code("judge = False\nreason = 'a block is out'\nwrong = []")])
     server.respond_with(lambda request: next(answers))
     rc, s, judged = judge(tmp_path, server, "--kinds", "oracle")
@@ -144,7 +95,7 @@ def test_failing_or_hostile_code_gets_one_repair_then_the_checked_question(serve
     assert r["errors"][0].startswith("code: ") and "import" in r["errors"][0]
     assert r["errors"][1].startswith("repair: ") and "IndexError" in r["errors"][1] and len(r["errors"]) == 2
     repair = prompt_text(server.requests[1])
-    assert "The checking code above failed" in repair and "inside_color" in repair
+    assert "The checking code above failed" in repair and "Do not set judge" in repair
     assert "already defined with the records" not in repair  # the answer did not copy the records
     # at temperature 0 the 1.5B model repeated its failed answer: the repair samples warmer, seeded by the state
     first, second = server.requests[0], server.requests[1]
@@ -172,26 +123,11 @@ def test_an_answer_copying_the_records_is_told_so_and_no_verdict_at_all_is_unkno
     assert s["overall"]["verdict_rate"] == 0.0
 
 
-def test_start_area_is_the_quarter_an_object_began_in(server: StubLLMServer, tmp_path: Path) -> None:
-    """The reporter sees where each object started (the judged state is placed after ``start``)."""
+def test_start_area_is_the_quarter_an_object_began_in() -> None:
+    """A record's ``start_area`` is the quarter its object spawned in (what the reporter's ``start`` keeps)."""
     stage, cases = cases_of(BOWLS, ("oracle",))
-    spawn = {o.name: o.pos for o in stage.scene.objects}
-    seen: list[dict[str, Any]] = []
-
-    def answer(request: dict[str, Any]) -> str:
-        text = prompt_text(request)
-        listing = text[text.rindex("objects = ["):text.rindex("\n# goal:")]
-        seen.extend(ast.literal_eval(listing.removeprefix("objects = ")))
-        return code("judge = True\nreason = 'ok'\nwrong = []")
-
-    server.respond_with(answer)
-    assert judge(tmp_path, server, "--kinds", "oracle")[0] == 0
-    moved = [r for r in seen if r["kind"] == "block" and r["start_area"] != r["area"]]
-    assert all(r["start_area"] == area_of(spawn[r["name"]]) for r in seen)
-    assert moved  # the oracle carried at least one block to another quarter: start and end differ
-
-
-def test_the_records_reporter_is_a_text_prompt(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["judge", "--tasks", BOWLS, "--seeds", str(SEED), "--out", str(tmp_path), "--reporter", "vlm",
-                 "--model", "m", "--reporter-prompt", "records"]) == 2
-    assert "--reporter-prompt records needs --reporter text" in capsys.readouterr().err
+    spawn = {o.obj_id: o.pos for o in stage.scene.objects}
+    rows = records(stage.realise(cases["oracle"].poses()), start_areas_of(spawn))
+    ids = {o.name: o.obj_id for o in stage.scene.objects}
+    assert all(r["start_area"] == area_of(spawn[ids[r["name"]]]) for r in rows)
+    assert any(r["kind"] == "block" and r["start_area"] != r["area"] for r in rows)  # the oracle moved a block across

@@ -1,23 +1,25 @@
-"""Scene facts capmj computes for a reporter, so that a model only compares them with the goal.
+"""The measured scene a reporter judges, in the tasks' own terms: facts per object and records.
 
-With the thesis's reporter (``parse_completion``) the model has to derive every fact itself —
-write code that reads poses, knows a zone's size and a bowl's radius, and tests containment and
-stacking.  The ``checked`` reporter prompt (:mod:`capmj.agents.report.checked`) instead shows one
-line of *measured* facts per object and asks only whether they match the goal.
-
-Each fact uses capmj's own rule, the one the task predicates use (:mod:`capmj.tasks.predicates`):
-a zone holds an object whose centre lies inside the zone's turned square
+Every fact uses the rule the task predicates use (:mod:`capmj.tasks.predicates`, its tolerances
+only): a zone holds an object whose centre lies inside the zone's turned square
 (:func:`~capmj.tasks.predicates.in_zone`), a bowl one within ``BOWL_TOL`` of its axis and below its
 rim (:func:`~capmj.tasks.predicates.in_bowl`), an object rests on another when
 :func:`~capmj.tasks.predicates.resting_on` holds, on the table when
-:func:`~capmj.tasks.predicates.resting_on_table` does, and is tilted beyond ``TILT_TOL``
-(:func:`~capmj.tasks.predicates.toppled`).  The poses come from the planner API the reporter is
-given (so with ``--perception rgbd`` they are the perceived ones, as for every other reporter),
+:func:`~capmj.tasks.predicates.resting_on_table` does, and is tilted beyond ``TILT_TOL``.  The poses
+come from the planner API the reporter is given (with ``--perception rgbd`` the perceived ones),
 the kinds, colours and sizes from the scene's specs.
 
-The module also resolves the names a model writes in ``wrong = [...]`` to real objects
-(:func:`resolve_name`): a full name, an ``obj_id N``, or a ``<colour> <kind>`` phrase that names
-exactly one object.
+- :func:`scene_facts` / :func:`facts_text`: one line of facts per object (the ``checked`` prompt);
+- :func:`records`: the same facts as one plain ``dict`` per object (the ``relations`` checks), with
+  the keys :data:`RECORD_KEYS`: ``name``, ``kind``, ``color``, ``size`` (blocks; else None), ``area``
+  (quarter of the table), ``start_area`` (the quarter it was in when the episode began),
+  ``rests_on`` (``"table"``, the full name of the object or bowl it is centred on, or
+  ``"nothing"``), ``below`` (the movable objects it rests on, by footprint overlap), ``level`` (1
+  on the table, a zone or in a bowl; else one more than the highest object below), ``inside``
+  (the zone or bowl it is in, ``""`` for none), ``inside_color``, ``holds`` (zones and bowls: the
+  movable objects inside), ``tilted`` and ``centre``; built fresh for every run, so code that
+  mutates them cannot change what a later run sees;
+- :func:`resolve_name`: the object a model meant by a name it wrote in ``wrong = [...]``.
 """
 
 from __future__ import annotations
@@ -33,7 +35,8 @@ from capmj.sim.pose import wxyz
 from capmj.sim.state import Pose, SceneState
 from capmj.tasks import predicates as P
 
-__all__ = ["AREAS", "OUTSIDE", "ObjectFacts", "area_of", "facts_text", "resolve_name", "scene_facts", "state_from_api"]
+__all__ = ["AREAS", "INVENTORY_KEYS", "OUTSIDE", "RECORD_KEYS", "ObjectFacts", "area_of", "facts_text", "records",
+           "records_text", "resolve_name", "scene_facts", "start_areas_of", "state_from_api"]
 
 
 @dataclass(frozen=True)
@@ -135,3 +138,74 @@ def resolve_name(name: str, objects: Sequence[ObjectSpec]) -> ObjectSpec | None:
         return next((o for o in objects if o.obj_id == int(m.group(1))), None)
     hits = [o for o in objects if re.search(rf"\b{re.escape(o.color)}\s+{re.escape(o.kind)}\b", text)]
     return hits[0] if len(hits) == 1 else None
+
+
+RECORD_KEYS = ("name", "kind", "color", "size", "area", "start_area", "rests_on", "below", "level", "inside", "inside_color",
+               "holds", "tilted", "centre")
+INVENTORY_KEYS = ("name", "kind", "color", "size")
+"""The keys that acting cannot change: what the ``relations`` question shows before the check runs."""
+_REST_SUFFIX = " (inside)"
+_NOTHING = "nothing (in the air or leaning)"
+
+
+def _record_rests_on(fact: ObjectFacts) -> str:
+    if fact.rests_on == "the table":
+        return "table"
+    if fact.rests_on == _NOTHING:
+        return "nothing"
+    return fact.rests_on.removesuffix(_REST_SUFFIX)
+
+
+def _below(state: SceneState, movable: Sequence[int]) -> dict[int, list[int]]:
+    """The movable objects each object rests on, by footprint overlap (:func:`~capmj.tasks.predicates.supporters`):
+    a block bridging two or four others (a pyramid's upper layers) rests on all of them."""
+    return {o.obj_id: P.supporters(state, o.obj_id, [m for m in movable if m != o.obj_id]) if not o.fixed else []
+            for o in state.objects}
+
+
+def _levels(below: Mapping[int, Sequence[int]]) -> dict[int, int]:
+    """1 + the highest level below (1 on the table, a zone or in a bowl); a support loop counts once."""
+    out: dict[int, int] = {}
+
+    def level(i: int, seen: frozenset[int]) -> int:
+        if i not in out:
+            out[i] = 1 + max((level(j, seen | {i}) for j in below[i] if j not in seen), default=0)
+        return out[i]
+
+    for i in below:
+        level(i, frozenset())
+    return out
+
+
+def records(state: SceneState, start_areas: Mapping[int, str] | None = None) -> list[dict[str, Any]]:
+    """One record per object of ``state``, in scene order (:data:`RECORD_KEYS`, see the module docstring)."""
+    facts = scene_facts(state)
+    below = _below(state, [o.obj_id for o in state.objects if not o.fixed])
+    levels = _levels(below)
+    colors = {o.name: o.color for o in state.objects}
+    out = []
+    for spec, f in zip(state.objects, facts):
+        container = f.kind in ("zone", "bowl")
+        out.append({
+            "name": f.name, "kind": f.kind, "color": spec.color, "size": spec.size,
+            "area": f.area, "start_area": (start_areas or {}).get(spec.obj_id, f.area),
+            "rests_on": _record_rests_on(f), "below": [state.spec(j).name for j in below[spec.obj_id]],
+            "level": levels[spec.obj_id],
+            "inside": f.inside[0] if f.inside else "", "inside_color": colors[f.inside[0]] if f.inside else "",
+            "holds": list(f.holds) if container else [],
+            "tilted": f.tilt_deg > math.degrees(P.TILT_TOL), "centre": [round(v, 3) for v in f.position]})
+    return out
+
+
+def records_text(rows: Sequence[Mapping[str, Any]], keys: Sequence[str] = RECORD_KEYS) -> str:
+    """``objects = [...]`` with one record per line, as the prompt shows it (``keys``, in their order)."""
+    lines = ["objects = ["]
+    for r in rows:
+        lines.append("    {" + ", ".join(f"{k!r}: {r[k]!r}" for k in keys) + "},")
+    lines.append("]")
+    return "\n".join(lines)
+
+
+def start_areas_of(positions: Mapping[int, Sequence[float]]) -> dict[int, str]:
+    """``{obj_id: quarter}`` of the positions an episode began with."""
+    return {i: area_of(p) for i, p in positions.items()}
