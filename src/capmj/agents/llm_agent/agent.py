@@ -46,8 +46,9 @@ from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, Checkpoint, EpisodeContext
 from capmj.agents.report.confidence import assess
 from capmj.agents.lmp.meter import LLMMeter, check_limits
+from capmj.agents.llm_agent.levels import LevelSession
 from capmj.agents.llm_agent.options import LLMAgentOptions, llm_agent_configs
-from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
+from capmj.agents.lmp.session import HelperCallCap, LMPCall, find_llm_error
 from capmj.agents.llm_agent.loop_policy import Decision, Outcome, decide, judges_errors, wrong_share
 from capmj.agents.api.perceived import make_api
 from capmj.agents.llm_agent.multiturn import run_turns
@@ -229,10 +230,11 @@ class LLMAgent:
         o = self.options
         api = make_api(ctx, o.perception)
         metered = self.meter.wrap(client.complete)  # logged, counted, stopped by the episode's LLM budget
-        session = LMPSession(complete=metered, api=api.functions(), objects_text=api.objects_text,
-                             attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
-                             lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=self.helper_cap,
-                             rng=episode_rng(ctx.seed, f"code{k}"))  # np.random of LLM code
+        session = LevelSession(complete=metered, api=api.functions(o.api), objects_text=api.objects_text,
+                               attempt=k, recorder=ctx.recorder, transcript=transcript, directory=o.prompts_dir,
+                               lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=self.helper_cap,
+                               rng=episode_rng(ctx.seed, f"code{k}"),  # np.random of LLM code
+                               api_level=o.api, examples=o.examples)
         session.check = plan_check(session, ctx)  # a plan's own parse_completion (CapRavens' plans check and retry)
         before = len(client.records)
         outcome = PlanOutcome()
