@@ -125,3 +125,27 @@ def test_the_same_seed_plans_the_same_path_in_two_processes() -> None:
     _, arm, _ = move_across(plan=True)
     here = [hashlib.sha256(p.joints.tobytes()).hexdigest() for p in arm.motion.paths if p.planned]
     assert json.loads(outs[0]) == here
+
+
+def test_planned_paths_are_drawn_as_lines_in_the_rrd(tmp_path) -> None:
+    pytest.importorskip("rerun")
+    import warnings
+
+    from rerun.chunk import RrdReader
+
+    from capmj.log.recorder import RerunRecorder
+
+    w, arm, _ = move_across(plan=True)
+    lines = [p.tip for p in arm.motion.paths if p.planned]
+    rec = RerunRecorder(tmp_path / "e.rrd", task="t", seed=1, agent="a")
+    rec.primitive(1, 1.0, {"pick": tuple(A), "place": tuple(B), "status": "ok", "ok": True, "planned": lines})
+    rec.primitive(2, 2.0, {"pick": tuple(B), "place": tuple(A), "status": "ok", "ok": True, "planned": ()})
+    rec.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        chunks = [c for c in RrdReader(str(tmp_path / "e.rrd")).stream().to_chunks()
+                  if c.entity_path.endswith("/planned")]
+    assert {c.entity_path for c in chunks} == {"/world/primitives/1/planned"}
+    batch = chunks[0].to_record_batch()
+    name = next(n for n in batch.schema.names if n.lower().endswith("strips"))
+    assert len(batch.column(name).to_pylist()[0]) == len(lines)

@@ -13,6 +13,8 @@
 ``/world/primitives/<k>``               pick (yellow) / place (blue) points and the pick->place arrow of
                                         primitive k, from its start on; ``.../final`` where the moved
                                         object ended, green when its goal condition holds at the end
+                                        ``.../planned`` the tool's path (violet lines) of each move of
+                                        the primitive that was planned around an obstacle
 ``/world/perception/detections``        rgbd mode: the planner API's objects after each perception
                                         call (the latest shown), boxes labelled with name and
                                         confidence, green right / orange wrong / red false

@@ -48,6 +48,8 @@ APPLICATION_ID = "capmj"
 CAMERAS: tuple[str, ...] = VIEW_CAMERAS
 MARKDOWN_TEXTS = frozenset({"goal", "verdict"})
 PICK_COLOR, PLACE_COLOR, PATH_COLOR, FAILED_PATH_COLOR = [255, 210, 0], [40, 150, 255], [200, 200, 200], [230, 60, 60]
+PLANNED_PATH_COLOR = [170, 90, 255]
+"""The tool's path of a move planned around an obstacle (``/world/primitives/<k>/planned``)."""
 _FLUSH_FRAMES = 4000         # frames buffered before a flush (200 s of simulated time)
 KEEP_EVERY = 2
 """Every KEEP_EVERY-th frame is written (10 Hz of simulated time), plus the last frame of each
@@ -223,6 +225,9 @@ class RerunRecorder:
         self.rec.log(ent, rr.Points3D([pick, place], colors=[PICK_COLOR, PLACE_COLOR]),
                      rr.Arrows3D(origins=[pick], vectors=[np.subtract(place, pick).tolist()],
                                  colors=[PATH_COLOR if ok else FAILED_PATH_COLOR], labels=[f"#{index}"]))
+        planned = [np.asarray(line, dtype=np.float32) for line in info.get("planned") or () if len(line) > 1]
+        if planned:  # the tool's path of each move planned around an obstacle
+            self.rec.log(f"{ent}/planned", rr.LineStrips3D(planned, colors=[PLANNED_PATH_COLOR]))
         self._stamp(t, index)
         line = (f"#{index} attempt {info.get('attempt', 0)}: {info.get('status')} obj {info.get('obj_id')} "
                 f"pick {fmt_vec(pick)} -> place {fmt_vec(place)} final {fmt_vec(info.get('final_pos'))}"
