@@ -255,3 +255,23 @@ def test_a_plan_error_at_the_low_level_names_its_class() -> None:
     f = PlannerAPI(ctx).functions("low")
     with pytest.raises(PlanError, match="UnreachablePose"):
         run_code("move_linear([0.5, 0.0, -0.1])", dict(f))
+
+
+def test_the_llm_agent_plans_at_the_low_level_without_examples() -> None:
+    """--agent llm --api low --examples none against the scripted server: the prompt sent is the
+    low level's without examples, and the answered low-level plan runs to success."""
+    from capmj.agents.llm_agent.agent import LLMAgent
+    from capmj.agents.llm_agent.options import LLMAgentOptions
+    from capmj.llm import LLMConfig
+    from llm_stub_server import StubLLMServer, prompt_text
+
+    code, _ = reference_plan(get_task("stack-all-blocks-on-a-zone"), "low")
+    with StubLLMServer(default_text=f"```python\n{code}```") as server:
+        agent = LLMAgent(LLMConfig("openai/stub", api_base=server.base_url, backoff_s=0.0, timeout_s=10.0),
+                         LLMAgentOptions(api="low", examples="none"))
+        r = run_episode(get_task("stack-all-blocks-on-a-zone"), 10001, agent)
+        sent = prompt_text(server.requests[0])
+    assert r.success, (r.error, r.diagnostics)
+    head = planner_prompt("low", "none").template.split("<<QUESTION>>")[0]
+    assert head.strip() in sent and "#@" not in sent
+    assert "put_first_on_second" not in sent and sent.count("objects = [") == 1  # the question's, no example's
