@@ -1,11 +1,11 @@
-"""Literals a relation check takes from nowhere (capmj.agents.report.relations.reporter): each rule fires on
+"""Literals a relation check takes from nowhere (capmj.agents.report.relations.picks): each rule fires on
 the misreading it is for, and stays quiet on the readings a person would write."""
 
 from __future__ import annotations
 
 import pytest
 
-from capmj.agents.report.relations.reporter import goal_numbers, ungrounded
+from capmj.agents.report.relations.picks import goal_numbers, ungrounded
 
 MIXED = [{"kind": "block", "color": c} for c in ("blue", "blue", "green", "orange")] + [
     {"kind": "zone", "color": "orange"}]

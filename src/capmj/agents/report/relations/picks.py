@@ -7,20 +7,24 @@ records.  It is forgiving where a small model's slip has one meaning (``blocks(c
 size, ``b.color`` reads the key, ``zone("zone")`` and a zone colour nothing in the scene has are
 the only zone) and strict everywhere else: anything it cannot read raises
 :class:`~capmj.errors.CheckArgumentError` naming the valid choices, which the reporter's repair
-request quotes.  A pick that finds no block is noted (:attr:`Picks.empty_picks`): a relation over nothing
+request quotes.  A literal pick the goal does not give (:func:`ungrounded`) is the reporter's
+``ungrounded_literal`` gate.  A pick that finds no block is noted (:attr:`Picks.empty_picks`): a relation over nothing
 always holds, and the holds-at-start repair request names what exists instead.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import ast
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from capmj.agents.report.scene import AREAS
+from capmj.agents.report.verdict import Answer
 from capmj.errors import CheckArgumentError
 from capmj.sim.palette import COOL, WARM
 
-__all__ = ["SELECTORS", "SIZE_WORDS", "Picks", "Record", "short"]
+__all__ = ["SELECTORS", "SIZE_WORDS", "Picks", "Record", "goal_numbers", "short", "ungrounded"]
 
 Record = dict[str, Any]
 
@@ -180,3 +184,79 @@ class Picks:
         axis, sign = SIDES[side]
         return [r for r in self.blocks() if r["name"] != ref["name"]
                 and sign * (self.start[r["name"]]["centre"][axis] - self.start[ref["name"]]["centre"][axis]) > more_than]
+
+
+# ------------------------------------------------------------------------------------------------
+# literals a check picks from nowhere: block colours and counts the goal does not say
+# ------------------------------------------------------------------------------------------------
+PLACE_NOUNS = ("zone", "zones", "bowl", "bowls", "area", "areas")
+"""Nouns after which a colour word names a place, not blocks."""
+NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven",
+                "twelve")
+"""Number words a goal may spell out, by value."""
+_NOT_COLOURS = frozenset({"warm", "cool", "big", "bigger", "large", "small", "smaller", "tiny"})
+
+
+def goal_numbers(goal: str) -> set[int]:
+    """The numbers a goal says, in digits or spelled out ("2*2*2" → 2; "two" → 2), with 0 and 1 ("no other
+    block", "a block"), which a goal need not spell."""
+    words = re.findall(r"[a-z]+|\d+", goal.lower())
+    return ({0, 1} | {int(w) for w in words if w.isdigit()}
+            | {NUMBER_WORDS.index(w) for w in words if w in NUMBER_WORDS})
+
+
+def _strings(node: ast.AST | None) -> list[str]:
+    """The string constants of a literal colour argument (one string, or a list/tuple of them)."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return [node.value]
+    if isinstance(node, (ast.List, ast.Tuple)):
+        return [e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
+    return []
+
+
+def _argument(call: ast.Call, position: int, keyword: str) -> ast.AST | None:
+    for kw in call.keywords:
+        if kw.arg == keyword:
+            return kw.value
+    return call.args[position] if len(call.args) > position else None
+
+
+def ungrounded(code: Answer | str, goal: str, rows: Iterable[Mapping[str, Any]]) -> str | None:
+    """Why the check uses a literal the goal does not give (a sentence for the repair request), or None.
+
+    A check may use what the goal says and what it computes from the objects, nothing else: a block
+    colour the goal uses only to name a place ("the orange zone"); a block colour the goal never
+    says, when the scene has blocks of colours the literal does not list (one that lists every block
+    colour picks them all) and no zone or bowl has it (a place's colour is the "matching colour"
+    reading); a count in ``require_count`` that is not a number of the goal.  ``rows``: the scene's
+    records (for the colours its blocks have)."""
+    answer = code if isinstance(code, Answer) else Answer.read(code)
+    if answer.tree is None:
+        return None  # the sandbox reports it
+    words = re.findall(r"[a-z]+", goal.lower())
+    rows = list(rows)
+    block_colours = {r["color"] for r in rows if r.get("kind") == "block"}
+    place_colours = {r["color"] for r in rows if r.get("kind") in ("zone", "bowl")}
+    for _, call in answer.calls("blocks"):
+        arg = _argument(call, 0, "color")
+        colours = _strings(arg) if arg is not None else []
+        picked = set(colours)
+        for colour in colours:  # in the answer's order: the repair request must not vary between runs
+            if colour.lower() in _NOT_COLOURS:
+                continue
+            said = [i for i, w in enumerate(words) if w == colour.lower()]
+            if said and all(i + 1 < len(words) and words[i + 1] in PLACE_NOUNS for i in said):
+                noun = words[said[0] + 1]
+                return (f'blocks(color="{colour}") picks {colour} blocks, but in the goal "{colour}" names the '
+                        f'{colour} {noun}, not the blocks: pick the blocks the goal means (all of them: blocks())')
+            if not said and block_colours - picked and colour not in place_colours:
+                return (f'blocks(color="{colour}") picks {colour} blocks, but the goal names no colour "{colour}": '
+                        "when the goal means a colour chosen by a property (the same colour as a place, the commonest "
+                        'colour ...), compute it from the objects, e.g. from [b["color"] for b in blocks()]')
+    numbers = goal_numbers(goal)
+    for _, call in answer.calls("require_count"):
+        n = _argument(call, 2, "n")
+        if isinstance(n, ast.Constant) and isinstance(n.value, int) and n.value not in numbers:
+            return (f"require_count(..., {n.value}) asks for {n.value} objects, but the goal says no number "
+                    f"{n.value}: compute the count from the objects (e.g. with len(...)) or use the goal's numbers")
+    return None

@@ -20,10 +20,9 @@ the other gates keep its verdict, low-confidence under their key.  Why each gate
 
 from __future__ import annotations
 
-import ast
 import dataclasses
 import re
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,6 +30,7 @@ from capmj.agents.lmp.codeprep import undefined_calls
 from capmj.agents.lmp.session import LMPCall, LMPSession
 from capmj.agents.report.checked import CheckedReporter
 from capmj.agents.report.relations.checks import CHECKS, NAMES, SELECTORS, Failures, relation_env
+from capmj.agents.report.relations.picks import ungrounded
 from capmj.agents.report.scene import INVENTORY_KEYS, records, records_text, start_areas_of, state_from_api
 from capmj.agents.report.verdict import Answer, Gate, Reading, Report, ask_for_verdict, gated, record_reading
 from capmj.agents.sandbox import run_code
@@ -39,7 +39,7 @@ from capmj.llm.provider import derived_seed
 from capmj.sim.state import SceneState
 
 __all__ = ["BLIND", "BLIND_GATE", "COVERAGE", "GATES", "HOLDS_AT_START", "IMPOSSIBLE", "LAYERED", "PROMPT", "Ran",
-           "RelationsReporter", "goal_numbers", "uncovered", "ungrounded"]
+           "RelationsReporter", "uncovered"]
 
 PROMPT = "reporter_relations"
 """The prompt file (``prompts/reporter_relations.py``) and the LMP name in transcripts."""
@@ -69,7 +69,7 @@ derived from the question: it can differ from the failed answer and still be rep
 
 
 # ------------------------------------------------------------------------------------------------
-# what an answer's text leaves out or takes from nowhere (read from its tree, no task knowledge)
+# what an answer's text leaves out (read from its tree, no task knowledge)
 # ------------------------------------------------------------------------------------------------
 PLACED = ("require_inside", "require_outside", "require_count")
 """Checks that say where objects must (not) be; ``require_stack(objs, place)`` does too."""
@@ -92,14 +92,6 @@ says "stack" asks for a stack or layers, "structure" or "layer" for layers (the 
 for ``require_layers``), "circle" or "ring" for a circle, "alternat..." for alternating colours,
 "in/on/into the ... zone/bowl" for where the objects must be."""
 
-PLACE_NOUNS = ("zone", "zones", "bowl", "bowls", "area", "areas")
-"""Nouns after which a colour word names a place, not blocks."""
-NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven",
-                "twelve")
-"""Number words a goal may spell out, by value."""
-_NOT_COLOURS = frozenset({"warm", "cool", "big", "bigger", "large", "small", "smaller", "tiny"})
-
-
 def _answer(code: Answer | str) -> Answer:
     return code if isinstance(code, Answer) else Answer.read(code)
 
@@ -121,71 +113,6 @@ def uncovered(code: Answer | str, goal: str) -> str | None:
         if found and not asked & set(checks):
             return (f'the goal says "{found.group(0)}", but no call asks for {relation}: '
                     + advice.format(checks=", ".join(checks)))
-    return None
-
-
-def goal_numbers(goal: str) -> set[int]:
-    """The numbers a goal says, in digits or spelled out ("2*2*2" → 2; "two" → 2), with 0 and 1 ("no other
-    block", "a block"), which a goal need not spell."""
-    words = re.findall(r"[a-z]+|\d+", goal.lower())
-    return ({0, 1} | {int(w) for w in words if w.isdigit()}
-            | {NUMBER_WORDS.index(w) for w in words if w in NUMBER_WORDS})
-
-
-def _strings(node: ast.AST | None) -> list[str]:
-    """The string constants of a literal colour argument (one string, or a list/tuple of them)."""
-    if isinstance(node, ast.Constant) and isinstance(node.value, str):
-        return [node.value]
-    if isinstance(node, (ast.List, ast.Tuple)):
-        return [e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
-    return []
-
-
-def _argument(call: ast.Call, position: int, keyword: str) -> ast.AST | None:
-    for kw in call.keywords:
-        if kw.arg == keyword:
-            return kw.value
-    return call.args[position] if len(call.args) > position else None
-
-
-def ungrounded(code: Answer | str, goal: str, rows: Iterable[Mapping[str, Any]]) -> str | None:
-    """Why the check uses a literal the goal does not give (a sentence for the repair request), or None.
-
-    A check may use what the goal says and what it computes from the objects, nothing else: a block
-    colour the goal uses only to name a place ("the orange zone"); a block colour the goal never
-    says, when the scene has blocks of colours the literal does not list (one that lists every block
-    colour picks them all) and no zone or bowl has it (a place's colour is the "matching colour"
-    reading); a count in ``require_count`` that is not a number of the goal.  ``rows``: the scene's
-    records (for the colours its blocks have)."""
-    answer = _answer(code)
-    if answer.tree is None:
-        return None  # the sandbox reports it
-    words = re.findall(r"[a-z]+", goal.lower())
-    rows = list(rows)
-    block_colours = {r["color"] for r in rows if r.get("kind") == "block"}
-    place_colours = {r["color"] for r in rows if r.get("kind") in ("zone", "bowl")}
-    for _, call in answer.calls("blocks"):
-        arg = _argument(call, 0, "color")
-        colours = _strings(arg) if arg is not None else []
-        picked = set(colours)
-        for colour in colours:  # in the answer's order: the repair request must not vary between runs
-            if colour.lower() in _NOT_COLOURS:
-                continue
-            said = [i for i, w in enumerate(words) if w == colour.lower()]
-            if said and all(i + 1 < len(words) and words[i + 1] in PLACE_NOUNS for i in said):
-                noun = words[said[0] + 1]
-                return (f'blocks(color="{colour}") picks {colour} blocks, but in the goal "{colour}" names the '
-                        f'{colour} {noun}, not the blocks: pick the blocks the goal means (all of them: blocks())')
-            if not said and block_colours - picked and colour not in place_colours:
-                return (f'blocks(color="{colour}") picks {colour} blocks, but the goal names no colour "{colour}": '
-                        "when the goal means a colour chosen by a property (the same colour as a place, the commonest "
-                        'colour ...), compute it from the objects, e.g. from [b["color"] for b in blocks()]')
-    numbers = goal_numbers(goal)
-    for _, call in answer.calls("require_count"):
-        n = _argument(call, 2, "n")
-        if isinstance(n, ast.Constant) and isinstance(n.value, int) and n.value not in numbers:
-            return (f"require_count(..., {n.value}) asks for {n.value} objects, but the goal says no number "
-                    f"{n.value}: compute the count from the objects (e.g. with len(...)) or use the goal's numbers")
     return None
 
 
@@ -234,7 +161,8 @@ GATES: tuple[Gate[Ran], ...] = (
          lambda ran: uncovered(ran.answer, ran.goal)),
 )
 """The gates of a check that ran, in the order they are tried: calls no scene can pass together
-(:meth:`Failures.impossible`), a literal the goal does not give (:func:`ungrounded`), every call
+(:meth:`Failures.impossible`), a literal the goal does not give
+(:func:`~capmj.agents.report.relations.picks.ungrounded`), every call
 passing on the start scene (its run's transcript entries say it), a relation the goal names left
 out (:func:`uncovered`)."""
 
