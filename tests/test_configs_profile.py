@@ -197,7 +197,8 @@ def test_report_refuses_runs_whose_task_stamps_differ(tmp_path: Path, monkeypatc
     capsys.readouterr()
     assert main(["report", str(tmp_path / "a"), str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
-    assert f"task {TASK}: stamps differ" in err and "differing: prompts" in err and "--allow-version-mismatch" in err
+    assert "prompt folder stamps differ" in err and "--allow-version-mismatch" in err
+    assert f"task {TASK}" not in err  # the task itself did not change
     assert main(["report", str(tmp_path / "a"), str(tmp_path / "b"), "--allow-version-mismatch", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["stamp_mismatches"] and list(summary["profile"]["configs"]) == ["S1", "S2"]
@@ -206,6 +207,13 @@ def test_report_refuses_runs_whose_task_stamps_differ(tmp_path: Path, monkeypatc
     summary = json.loads(capsys.readouterr().out)
     assert summary["profile"]["configs"] == ["S1", "S2"] and "stamp_mismatches" not in summary
     assert summary["profile"]["paired"][0]["overall"]["n"] == 1
+    # the oracle reads no prompt: its column stays comparable with runs under edited prompts
+    assert main(["--agent", "oracle", "--tasks", TASK, "--seeds", "10001", "--out", str(tmp_path / "o"),
+                 "--no-progress", "--no-log", "--workers", "0"]) == 0
+    assert json.loads((tmp_path / "o" / "config.json").read_text())["stamp"]["prompts"] is None
+    capsys.readouterr()
+    assert main(["report", str(tmp_path / "o"), str(tmp_path / "a"), str(tmp_path / "b"), "--json"]) == 2
+    assert main(["report", str(tmp_path / "o"), str(tmp_path / "b"), "--json"]) == 0
 
 
 def test_a_changed_task_module_names_the_code() -> None:

@@ -332,8 +332,9 @@ def combined_stamp(stamps: Mapping[str, Mapping[str, Any] | None], tasks: Sequen
             if task in tasks:
                 per.setdefault(task, entry)
     first = have[0]
-    return {"schema": SCHEMA, "overall": overall(per), "capmj": first.get("capmj"), "mjcf": first.get("mjcf"),
-            "prompts": first.get("prompts"), "tasks": per}, problems
+    prompts = next((s.get("prompts") for s in have if s.get("prompts")), None)
+    return {"schema": SCHEMA, "overall": overall(per, prompts), "capmj": first.get("capmj"), "mjcf": first.get("mjcf"),
+            "prompts": prompts, "tasks": per}, problems
 
 
 def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[int, str], list[str]]:

@@ -200,6 +200,10 @@ def _validate(inv: Invocation, config: BenchConfig, stored: Mapping[str, Any] | 
     return _Grid(seeds, tasks, registered, members, manifest, stamp)
 
 
+PROMPT_READERS = ("llm", "reference")
+"""Agents whose episodes depend on the prompt folder (the LLM's prompts, the reference plans)."""
+
+
 def run_stamp(agent: Any, tasks: Sequence[str], stored: Mapping[str, Any] | None) -> dict[str, Any]:
     """The task set's stamp as this agent runs it (its prompt folder); on a resume, warns (stderr)
     about the tasks whose stamp changed since."""
@@ -207,7 +211,9 @@ def run_stamp(agent: Any, tasks: Sequence[str], stored: Mapping[str, Any] | None
     from capmj.resources import prompts_dir
 
     folder = agent_setting(agent, "prompts_dir")
-    stamp = task_set_stamp({t: registry.get_task(t) for t in tasks}, Path(folder) if folder else prompts_dir())
+    reads = getattr(agent, "name", "") in PROMPT_READERS
+    stamp = task_set_stamp({t: registry.get_task(t) for t in tasks},
+                           (Path(folder) if folder else prompts_dir()) if reads else None)
     if stored and stored.get("stamp"):
         for problem in mismatches({"stored run": stored["stamp"], "this resume": stamp}, tasks):
             print(f"capmj-bench: warning: resuming with another task version: {problem}", file=sys.stderr)

@@ -2,10 +2,12 @@
 
 Per task, a SHA-256 over its code (the source of its module; for a generated task, the exact text
 of the module its accepted package holds, :class:`~capmj.confine.proxy.ModuleSource`), the world's
-MJCF templates (every ``mjcf/*.xml``), the prompt folder the agent reads, and capmj's version;
-overall, a SHA-256 over the tasks' stamps in name order.  A benchmark fix to one task changes that
-task's stamp and the overall one, never another task's.  ``report`` compares the stamps of the
-tasks two runs share (:func:`mismatches`) and refuses runs that differ unless told otherwise.
+MJCF templates (every ``mjcf/*.xml``) and capmj's version; beside them the hash of the prompt
+folder the agent reads (``prompts``; None for an agent that reads none, the oracle); overall, a
+SHA-256 over the tasks' stamps in name order and the prompts.  A benchmark fix to one task changes
+that task's stamp and the overall one, never another task's.  ``report`` compares the stamps of the
+tasks two runs share and their prompts where both read prompts (:func:`mismatches`), and refuses
+runs that differ unless told otherwise: an oracle column stays comparable with an LLM one.
 
 ``config.json`` holds the stamp under ``stamp`` and every summary prints it (``summary.json``
 ``stamp``; the short form is the first :data:`SHORT` hex digits).
@@ -65,24 +67,26 @@ def capmj_version() -> str:
 
 
 def task_set_stamp(tasks: Mapping[str, Any], prompts: Path | None) -> dict[str, Any]:
-    """The stamp of ``tasks`` (name -> task object) as run with the prompt folder ``prompts``."""
+    """The stamp of ``tasks`` (name -> task object) as run with the prompt folder ``prompts``
+    (None: the agent reads no prompt)."""
     from capmj.resources import packaged
 
     mjcf = folder_hash(packaged("mjcf"), "*.xml")
-    prompt = folder_hash(prompts)
+    prompt = folder_hash(prompts) if prompts is not None else None
     version = capmj_version()
     per: dict[str, dict[str, str]] = {}
     for name in sorted(tasks):
         kind, code = task_code(tasks[name])
-        stamp = _sha("\n".join((name, code, mjcf, prompt, version)).encode())
+        stamp = _sha("\n".join((name, code, mjcf, version)).encode())
         per[name] = {"stamp": stamp, "code": code, "kind": kind}
-    return {"schema": SCHEMA, "overall": overall(per), "capmj": version, "mjcf": mjcf, "prompts": prompt,
+    return {"schema": SCHEMA, "overall": overall(per, prompt), "capmj": version, "mjcf": mjcf, "prompts": prompt,
             "tasks": per}
 
 
-def overall(per_task: Mapping[str, Mapping[str, str]]) -> str:
-    """The overall stamp of per-task stamps (name order)."""
-    return _sha("\n".join(f"{n}:{per_task[n]['stamp']}" for n in sorted(per_task)).encode())
+def overall(per_task: Mapping[str, Mapping[str, str]], prompts: str | None = None) -> str:
+    """The overall stamp of per-task stamps (name order) and the prompts' hash."""
+    lines = [f"{n}:{per_task[n]['stamp']}" for n in sorted(per_task)] + [f"prompts:{prompts or 'none'}"]
+    return _sha("\n".join(lines).encode())
 
 
 def short(stamp: str | None) -> str:
@@ -100,17 +104,20 @@ def mismatches(stamps: Mapping[str, Mapping[str, Any] | None], tasks: Sequence[s
         values = {src: (s.get("tasks") or {}).get(task, {}).get("stamp") for src, s in have.items()}
         values = {src: v for src, v in values.items() if v is not None}
         if len(set(values.values())) > 1:
-            what = _what_differs(task, have)
+            what = _what_differs(task, {src: have[src] for src in values})
             out.append(f"task {task}: stamps differ ({', '.join(f'{src}={short(v)}' for src, v in values.items())})"
                        + (f"; {what}" if what else ""))
+    prompts = {src: s.get("prompts") for src, s in have.items() if s.get("prompts")}
+    if len(set(prompts.values())) > 1:
+        out.append(f"prompt folder stamps differ ({', '.join(f'{src}={short(v)}' for src, v in prompts.items())}); "
+                   "the prompts the agents read changed")
     return out
 
 
 def _what_differs(task: str, stamps: Mapping[str, Mapping[str, Any]]) -> str:
     parts = []
     for part, value in (("code", lambda s: (s.get("tasks") or {}).get(task, {}).get("code")),
-                        ("MJCF templates", lambda s: s.get("mjcf")), ("prompts", lambda s: s.get("prompts")),
-                        ("capmj version", lambda s: s.get("capmj"))):
+                        ("MJCF templates", lambda s: s.get("mjcf")), ("capmj version", lambda s: s.get("capmj"))):
         if len({value(s) for s in stamps.values()}) > 1:
             parts.append(part)
     return "differing: " + ", ".join(parts) if parts else ""
