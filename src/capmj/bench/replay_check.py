@@ -71,6 +71,8 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
     args = effective_args(config)  # the settings the run's latest part ran with
     agent_name = args.get("agent") or "oracle"
     options = dict(args.get("agent_options") or {})
+    per_config = {c["name"]: dict(c.get("options") or {}) for c in args.get("configs") or []}  # a --configs run
+    replay_options: dict[str, Any] = {}
     if agent_name == "llm":
         cache = cache_dir or (config.get("manifest") or {}).get("cache_dir")
         if not cache:
@@ -78,24 +80,33 @@ def replay_check(run_dir: str | Path, *, cache_dir: str | Path | None = None, to
                               "Give --cache DIR if the completions are cached elsewhere")
         if not Path(cache).is_dir():
             raise ConfigError(f"LLM cache folder {str(cache)!r} does not exist")
-        options.update(cache_dir=str(cache), cache_only=True)
-    agent = make_agent(agent_name, **options)
+        replay_options = {"cache_dir": str(cache), "cache_only": True}
+    agents: dict[str | None, Any] = {}
+
+    def agent_of(config: str | None) -> Any:
+        """The agent of a record's configuration (built once; the run's own options without one)."""
+        if config not in agents:
+            agents[config] = make_agent(agent_name, **{**per_config.get(config or "", options), **replay_options})
+        return agents[config]
+
+    agent_of(None if not per_config else next(iter(per_config)))  # bad options fail before any episode
     records, _ = read_records(run_dir / EPISODES)
-    records.sort(key=lambda r: (r.task, r.seed))
+    records.sort(key=lambda r: (r.config or "", r.task, r.seed))
     mismatches: list[dict[str, Any]] = []
     live = 0
     for rec in records:
         try:
-            result = run_episode(get_task(rec.task), rec.seed, agent)
+            result = run_episode(get_task(rec.task), rec.seed, agent_of(rec.config))
         except CapmjError as exc:
-            mismatches.append({"task": rec.task, "seed": rec.seed, "reasons": [f"cannot replay: {exc}"]})
+            mismatches.append({"config": rec.config, "task": rec.task, "seed": rec.seed,
+                               "reasons": [f"cannot replay: {exc}"]})
             continue
         new = as_record(EpisodeResult.from_dict(sanitize(result.to_dict())))  # as the grid would write it
         if new.llm is not None:
             live += new.llm.calls - new.llm.cached_calls - new.llm.failed_calls
         reasons = compare(rec, new, tol)
         if reasons:
-            mismatches.append({"task": rec.task, "seed": rec.seed, "reasons": reasons})
+            mismatches.append({"config": rec.config, "task": rec.task, "seed": rec.seed, "reasons": reasons})
         if progress is not None:
             progress(rec, reasons)
     return {"run": str(run_dir), "episodes": len(records), "passed": len(records) - len(mismatches),
@@ -114,7 +125,8 @@ def main(argv: Sequence[str]) -> int:
     args = p.parse_args(list(argv))
 
     def show(rec: EpisodeRecord, reasons: list[str]) -> None:
-        print(f"{rec.task} seed {rec.seed}: " + ("ok" if not reasons else "DIFFERS: " + "; ".join(reasons)),
+        where = f"[{rec.config}] " if rec.config is not None else ""
+        print(f"{where}{rec.task} seed {rec.seed}: " + ("ok" if not reasons else "DIFFERS: " + "; ".join(reasons)),
               file=sys.stderr)
 
     try:
