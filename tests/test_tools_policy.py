@@ -289,6 +289,10 @@ def test_tools_take_their_own_options() -> None:
         LLMAgentOptions(policy="functions")
     with pytest.raises(ConfigError, match="--interaction multi"):
         LLMAgentOptions(policy="tools", feedback="image")
+    with pytest.raises(ConfigError, match="--api low runs with --policy code"):
+        LLMAgentOptions(policy="tools", api="low")
+    bare = system_prompt(8, examples="none")
+    assert "An example" not in bare and bare.startswith(system_prompt(8).split("\n\n")[0])
 
 
 def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, tmp_path: Path) -> None:

@@ -82,9 +82,11 @@ def check_tool_calling(model: str) -> None:
                                      "--policy code, or a model that calls functions")
 
 
-def system_prompt(max_turns: int, directory: Path | None = None) -> str:
-    """The tool-calling system message: ``prompts/tools_system.txt`` with the number of turns."""
-    return load_prompt("tools_system.txt", directory).render(str(max_turns)).strip()
+def system_prompt(max_turns: int, directory: Path | None = None, examples: str = "full") -> str:
+    """The tool-calling system message: ``prompts/tools_system.txt`` with the number of turns; its
+    example conversation left out with ``examples="none"`` (``--examples none``)."""
+    prompt = load_prompt("tools_system.txt", directory)
+    return (prompt if examples == "full" else prompt.without_examples()).render(str(max_turns)).strip()
 
 
 def conversation_text(messages: Sequence[dict[str, Any]]) -> str:
@@ -242,7 +244,7 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
                                  lmp_budget=o.lmp_budget, max_fn_depth=o.max_fn_depth, helper_cap=agent.helper_cap,
                                  rng=episode_rng(ctx.seed, f"code{k}"))
             if not messages:
-                messages = [{"role": "system", "content": system_prompt(max_turns, o.prompts_dir)},
+                messages = [{"role": "system", "content": system_prompt(max_turns, o.prompts_dir, o.examples)},
                             {"role": "user", "content": question(session.objects_text(), goal)}]
             before = [len(c.records) for c in clients]
             made = len(meter.calls)
