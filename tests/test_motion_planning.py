@@ -73,8 +73,9 @@ def test_a_move_across_a_tower_knocks_it_unplanned_and_goes_around_it_planned() 
 
 def test_pick_and_place_past_a_tower_never_knocks_it() -> None:
     """Six big blocks stacked between pick and place, next to the place point: the straight
-    primitive's wrist sweeps the tower down; with planning on the primitive refuses (the wrist
-    would touch it wherever the tool points down there) and the tower stands."""
+    primitive's wrist sweeps the tower down as it descends; with planning on the arm takes
+    another posture for the descent (its wrist on the other side) and places the block with
+    the tower standing."""
     pick, place = np.array([0.35, -0.3]), np.array([0.35, 0.3])
     results = {}
     for plan in (False, True):
@@ -85,7 +86,7 @@ def test_pick_and_place_past_a_tower_never_knocks_it() -> None:
     assert results[False][0].ok and results[False][1] > KNOCKED_M
     res, moved = results[True]
     assert moved < UNDISTURBED_M
-    assert res.status == "no_path" and "wrist" in res.message and "obj_id" in res.message
+    assert res.ok and np.linalg.norm(np.asarray(res.final_pos)[:2] - place) < 0.01
 
 
 def test_a_place_target_inside_a_fixture_wall_fails_as_motion() -> None:

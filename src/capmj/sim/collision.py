@@ -20,6 +20,7 @@ being placed on), which only the cup and the carried object may touch.
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 
 import mujoco
@@ -114,7 +115,8 @@ class CollisionChecker:
             while a and a not in joint_body:
                 a = int(m.body_parentid[a])
             self._last_joint[b] = joint_body.get(a, len(self._joints) - 1)
-        self._reach = np.ones(len(self._joints))
+        self._robot_reach = np.ones(len(self._joints))
+        self._reach = self._robot_reach
         self._held: int | None = None
         self._held_geoms = np.empty(0, dtype=int)
         self._held_qadr = -1
@@ -122,6 +124,7 @@ class CollisionChecker:
         self._held_rel_mat = np.eye(3)
         self._quat = np.zeros(4)
         self._names = self._part_names()
+        self._robot_reach = self._joint_reach(world.data, self._robot_geoms)  # the same in every configuration
         self.checks = 0
         """Configurations checked so far (a deterministic measure of planning effort)."""
         self.sync()
@@ -157,9 +160,11 @@ class CollisionChecker:
         m.geom_margin[moving] = max(LOOKAHEAD, self.clearance)
         self._moving = np.zeros(m.ngeom, dtype=bool)
         self._moving[moving] = True
+        self._moving_list: list[bool] = self._moving.tolist()
         self._tool = np.zeros(m.ngeom, dtype=bool)
         self._tool[[w.cup_geom, *self._held_geoms.tolist()]] = True
-        self._reach = self._joint_reach(w.data, moving)
+        self._reach = self._robot_reach if held is None else \
+            np.maximum(self._robot_reach, self._joint_reach(w.data, self._held_geoms))
         for b in range(m.nbody):
             m.body_contype[b] = int(np.bitwise_or.reduce(m.geom_contype[m.geom_bodyid == b], initial=0))
             m.body_conaffinity[b] = int(np.bitwise_or.reduce(m.geom_conaffinity[m.geom_bodyid == b], initial=0))
@@ -182,7 +187,7 @@ class CollisionChecker:
         reach = np.zeros(len(self._joints))
         for g in moving.tolist():
             k = self._last_joint[int(m.geom_bodyid[g])]
-            extent = float(np.linalg.norm(data.geom_xpos[g] - anchors[k]) + m.geom_rbound[g] + m.geom_margin[g])
+            extent = float(np.linalg.norm(data.geom_xpos[g] - anchors[k]) + m.geom_rbound[g])
             for i in range(k + 1):
                 reach[i] = max(reach[i], float(links[i:k].sum()) + extent)
         return reach
@@ -216,11 +221,11 @@ class CollisionChecker:
         n = d.ncon
         if n == 0:
             return []
-        geoms, dists = d.contact.geom[:n], d.contact.dist[:n]
-        swap = self._moving[geoms[:, 1]]
-        first = np.where(swap, geoms[:, 1], geoms[:, 0])
-        second = np.where(swap, geoms[:, 0], geoms[:, 1])
-        return list(zip(first.tolist(), second.tolist(), dists.tolist()))
+        moving = self._moving_list
+        out = []
+        for (g1, g2), dist in zip(d.contact.geom[:n].tolist(), d.contact.dist[:n].tolist()):
+            out.append((g2, g1, dist) if moving[g2] else (g1, g2, dist))
+        return out
 
     def owner(self, static_geom: int) -> int:
         """The owner id of a static geom: its object id, or :data:`TABLE`."""
@@ -282,24 +287,32 @@ class CollisionChecker:
         if len(qs) == 0:
             return None
         steps = np.abs(np.diff(qs, axis=0))
-        metres = np.concatenate([[0.0], np.cumsum(steps @ self._reach)])  # bound on any point's travel
-        joint = np.concatenate([[0.0], np.cumsum(steps.max(axis=1, initial=0.0))])
-        rows = np.arange(len(qs), dtype=float)
+        metres = np.concatenate([[0.0], np.cumsum(steps @ self._reach)]).tolist()  # bound on any point's travel
+        joint = np.concatenate([[0.0], np.cumsum(steps.max(axis=1, initial=0.0))]).tolist()
+        last = len(qs) - 1
         u = 0.0
-        last = float(len(qs) - 1)
         while True:
-            i = min(int(u), len(qs) - 2) if len(qs) > 1 else 0
-            q = qs[i] + (u - i) * (qs[i + 1] - qs[i]) if len(qs) > 1 else qs[0]
+            i = min(int(u), last - 1) if last else 0
+            q = qs[i] + (u - i) * (qs[i + 1] - qs[i]) if last else qs[0]
             hit, free = self._check(q, allow)
             if hit is not None:
                 return i, hit
             if u >= last:
                 return None
-            at_m = float(np.interp(u, rows, metres))
-            at_j = float(np.interp(u, rows, joint))
-            u_far = float(np.interp(at_m + max(free - self.clearance, 0.0), metres, rows))
-            u_near = float(np.interp(at_j + CHECK_STEP, joint, rows))
-            u = min(last, max(u_far, u_near, u + 1e-9))
+            f = u - i
+            u_far = _advance(metres, i, metres[i] + f * (metres[i + 1] - metres[i]) + max(free - self.clearance, 0.0))
+            u_near = _advance(joint, i, joint[i] + f * (joint[i + 1] - joint[i]) + CHECK_STEP)
+            u = min(float(last), max(u_far, u_near, u + 1e-9))
+
+
+def _advance(cum: list[float], i: int, value: float) -> float:
+    """The (fractional) row at which the non-decreasing ``cum`` reaches ``value``, from row ``i`` on."""
+    last = len(cum) - 1
+    j = bisect.bisect_left(cum, value, i + 1)
+    if j > last:
+        return float(last)
+    lo, hi = cum[j - 1], cum[j]
+    return float(j) if hi <= lo else (j - 1) + (value - lo) / (hi - lo)
 
 
 def _copy_model(model: mujoco.MjModel) -> mujoco.MjModel:

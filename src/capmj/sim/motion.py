@@ -230,8 +230,21 @@ class Motion:
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
         """
-        q = self.world.arm_ctrl()
-        start, yaw_prev = self.ik.tip_position(q), self.commanded_yaw()
+        plans = self.plan_lines(points, speed, slow_last)
+        if isinstance(plans, int):
+            return "unreachable", 0, plans
+        plans = self.clear_legs(plans, guarded=stop is not None)
+        status, steps = self.run_legs(plans, np.asarray(points[-1][0], float), stop)
+        return status, steps, -1
+
+    def plan_lines(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None,
+                   slow_last: float = 0.0, q_start: np.ndarray | None = None) -> list[SegmentPlan] | int:
+        """The straight tool lines of :meth:`move_through` from joints ``q_start`` (default: the
+        commanded ones), unchecked; or the index of the first line that cannot be planned."""
+        q = self.world.arm_ctrl() if q_start is None else np.asarray(q_start, float)
+        start = self.ik.tip_position(q)
+        rot = self.ik.data.site_xmat[self.ik.site].reshape(3, 3)
+        yaw_prev = float(np.arctan2(rot[1, 0], rot[0, 0]))
         plans = []
         for k, (pos, yaw) in enumerate(points):
             pos = np.asarray(pos, float)
@@ -239,10 +252,17 @@ class Motion:
             last = k == len(points) - 1
             plan = self.plan_line(start, pos, yaw0, yaw, speed or self.cfg.speed, slow_last if last else 0.0, q)
             if plan is None:
-                return "unreachable", 0, k
+                return k
             plans.append(plan)
             start, q, yaw_prev = pos, plan.qs[-1], yaw
-        plans = self.clear_legs(plans, guarded=stop is not None)
+        return plans
+
+    def run_legs(self, plans: Sequence[SegmentPlan], target: np.ndarray,
+                 stop: Callable[[], bool] | None = None) -> tuple[str, int]:
+        """Track consecutive legs as one move (corners between two tool lines rounded within
+        ``blend``; a joint-space leg starts and ends at rest), then converge on the tip position
+        ``target``; ``stop`` is checked on the last leg.  Returns ("ok" | "stopped", steps).  The
+        legs are run as given: check them first (:meth:`clear_legs`)."""
         # Each line's inertia term uses the arm's inertia where that line starts; a blend adds the
         # two lines' references, velocities and inertia terms over the overlap.
         ref_q, ref_v, acc, path = self._reference(plans[0])
@@ -262,10 +282,31 @@ class Motion:
         stopped, steps = self._track(ref_q, ref_v, ref_t, stop, stop_from)
         if stopped:
             self.world.set_arm_ctrl(self.world.arm_q())
-            return "stopped", steps, -1
+            return "stopped", steps
         self.world.set_arm_ctrl(plans[-1].qs[-1])
-        stopped, more = self.converge(np.asarray(points[-1][0], float), stop)
-        return ("stopped" if stopped else "ok"), steps + more, -1
+        stopped, more = self.converge(target, stop)
+        return ("stopped" if stopped else "ok"), steps + more
+
+    def branches(self, pos: np.ndarray, yaw: float) -> list[np.ndarray]:
+        """Every IK branch (shoulder, elbow, wrist) reaching ``pos`` pointing down with ``yaw``
+        within the joint limits, refined on the model, nearest the commanded joints first: other
+        arm postures for the same tool pose, whose links stand elsewhere."""
+        from capmj.sim.ik import tool_rotation
+
+        q_now = self.world.arm_ctrl()
+        target = np.eye(4)
+        target[:3, :3] = tool_rotation(yaw)
+        target[:3, 3] = pos
+        out = []
+        for sol in self.ik._solver.inverse_kinematics_with_tcp(target, self.ik._tcp):
+            q = np.asarray(sol, float)
+            if not np.all(np.isfinite(q)):
+                continue
+            q = q_now + (q - q_now + np.pi) % (2 * np.pi) - np.pi  # each joint's turn nearest the current one
+            res = self.ik.solve(pos, yaw, q)
+            if res.q is not None and not any(np.allclose(res.q, o, atol=1e-3) for o in out):
+                out.append(res.q)
+        return sorted(out, key=lambda q: float(np.abs(q - q_now).max()))
 
     # ------------------------------------------------------------------ planned moves
     def move_joints(self, q_goal: np.ndarray, stop: Callable[[], bool] | None = None) -> tuple[str, int]:

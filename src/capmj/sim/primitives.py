@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -196,8 +197,8 @@ class Primitives:
             over_pick = np.array([pick[0], pick[1], transit])
             surface = self.coarse_top_under(pick[:2])
             touching = lambda: w.suction.touching() is not None  # noqa: E731
-            status, _, leg = m.move_through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
-                                            stop=touching, slow_last=cfg.approach_gap + cfg.overshoot)
+            status, _, leg = self._through([(over_pick, yaw), (np.array([pick[0], pick[1], surface - cfg.overshoot]), yaw)],
+                                           touching, cfg.approach_gap + cfg.overshoot)
             if status == "unreachable" and (leg == 0 or m.move_to(over_pick, yaw)[0] == "unreachable"):
                 return _Failure("unreachable", None, f"pick point {pick_t[:2]} is out of reach")
         except MotionPlanningError as exc:
@@ -284,7 +285,7 @@ class Primitives:
         legs = [(np.array([tip[0], tip[1], transit]), yaw), (np.array([tip_xy[0], tip_xy[1], transit]), new_yaw),
                 (down, new_yaw)]
         lifts = 1  # legs[:lifts] lift the object; then the carry over the place point, then the descent
-        status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot)
+        status, _, leg = self._through(legs, placed, cfg.approach_gap + cfg.overshoot)
         if status == "unreachable" and leg == 0:
             # Out of reach straight up: only what the carry passes over needs clearing (the carried
             # object's footprint around the tip), on a slope between the highest reachable heights.
@@ -307,6 +308,51 @@ class Primitives:
                 return _Failure("unreachable", obj, "cannot lift to transit height")
             return _Failure("unreachable", obj, f"place point {place_t[:2]} is out of reach; object put back")
         return place_z
+
+    def _through(self, legs: list[tuple[np.ndarray, float]], stop: Callable[[], bool],
+                 slow_last: float) -> tuple[str, int, int]:
+        """:meth:`Motion.move_through` of ``legs`` ending in a guarded descent (the last leg, from
+        the point of the one before).  When that has no clear path, the arm tries the descent in
+        another posture: the legs before as they were, then a joint-space move to another IK
+        branch over the descent (a wrist or elbow turned the other way puts the links that
+        touched elsewhere; :meth:`Motion.branches`), then the descent; the first posture whose
+        legs are all clear is taken.  The same when the transit into the descent or the descent
+        is unreachable in the current posture (the IK branch the lines follow).  Raises the first
+        MotionPlanningError, or returns the first outcome, when no posture helps."""
+        m = self.motion
+        first: MotionPlanningError | tuple[str, int, int]
+        try:
+            first = m.move_through(legs, stop=stop, slow_last=slow_last)
+            if first[0] != "unreachable" or first[2] < len(legs) - 2:
+                return first
+        except MotionPlanningError as exc:
+            first = exc
+        if not self.cfg.plan_collisions or len(legs) < 2:
+            return self._give_up(first)
+        (over, yaw), (down, down_yaw) = legs[-2], legs[-1]
+        before = m.plan_lines(legs[:-2]) if len(legs) > 2 else []
+        if isinstance(before, int):
+            return self._give_up(first)
+        q_here = before[-1].qs[-1] if before else self.world.arm_ctrl()
+        for q_alt in m.branches(over, yaw):
+            descent = m.plan_lines([(down, down_yaw)], slow_last=slow_last, q_start=q_alt)
+            if isinstance(descent, int):
+                continue
+            try:
+                checked = m.clear_legs([*before, m.joint_plan(np.array([q_here, q_alt])), *descent], guarded=True)
+            except MotionPlanningError:
+                continue
+            status, steps = m.run_legs(checked, np.asarray(down, float), stop)
+            return status, steps, -1
+        return self._give_up(first)
+
+    @staticmethod
+    def _give_up(first: MotionPlanningError | tuple[str, int, int]) -> tuple[str, int, int]:
+        """The first outcome of :meth:`_through` when no other posture helped: raised again if it
+        was a MotionPlanningError, else returned."""
+        if isinstance(first, MotionPlanningError):
+            raise first
+        return first
 
     def _release_and_retreat(self, place_z: float, yaw: float) -> None:
         """Step 4: let go, rise and let the objects come to rest."""
