@@ -1,13 +1,15 @@
 """The robot driver under the low-level planner API (``--api low``): moves, suction, budgets, records.
 
 :class:`RobotDriver` is what :class:`~capmj.agents.api.low_level.LowLevelFunctions` acts through.
-It runs the arm in real physics with the sim's own motion layer (:class:`~capmj.sim.motion.Motion`:
-straight tip lines planned on IK before the arm moves, joint-space segments), and adds what a robot
-driver adds on top:
+It runs the arm in real physics with the sim's own motion layer (:class:`~capmj.sim.motion.Motion`):
+planned moves (:meth:`RobotDriver.move_planned`, :meth:`RobotDriver.move_joints`) are collision-checked
+and planned around obstacles there; straight moves (:meth:`RobotDriver.move_lines`,
+:meth:`RobotDriver.move_until_contact`) are tip lines planned on IK before the arm moves and
+executed as asked.  On top it adds what a robot driver adds:
 
 * **Contact watch.**  Every move is watched step by step for a *new* contact (one that did not
-  exist when the move started) of an arm link, the suction cup or the carried object with the
-  table or an object.  A guarded move (:meth:`RobotDriver.move_until_contact`) stops at the first
+  exist when the move started, :class:`~capmj.sim.contact_watch.ContactWatch`) of an arm link, the
+  suction cup or the carried object with the table or an object.  A guarded move (:meth:`RobotDriver.move_until_contact`) stops at the first
   contact of the tool (the cup, or the carried object when one is held) and reports it; any other
   new contact stops the arm where it is and raises :class:`~capmj.errors.CollisionDetected`.
 * **Refusals before motion.**  A target below the table top, out of reach or beyond a joint limit
@@ -24,12 +26,13 @@ The tool always points straight down; a tool pose is a position and a yaw about 
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Iterable, Protocol, Sequence
+from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 
 from capmj.agents.api.interface import PlannerInterface
 from capmj.errors import CollisionDetected, UnreachablePose
+from capmj.sim.contact_watch import CUP, LINK, TABLE, ContactWatch
 from capmj.sim.line_plan import SegmentPlan
 from capmj.sim.motion import Motion
 from capmj.sim.pose import mat_to_quat, mat_yaw, xyzw
@@ -47,92 +50,10 @@ TABLE_Z = 0.0
 CONTACT_DEPTH = 0.05
 """m below the table top a guarded move may aim at (it stops where the tool meets something)."""
 
-_TABLE, _CUP, _LINK = -2, -1, 0
-"""Owner codes of geoms that are no object: the table and floor, the suction cup, an arm link
-(objects are their obj_id, >= 1)."""
-
-
 class _Perceiving(Protocol):
     """The part of :class:`~capmj.agents.api.perceived.PerceivedScene` the driver uses."""
 
     def refresh(self, moved: dict[int, tuple[float, float, float]]) -> None: ...
-
-
-def _owners(world: World) -> list[int]:
-    """Each geom's owner code: its obj_id, or :data:`_TABLE`, :data:`_CUP`, :data:`_LINK`."""
-    m = world.model
-    out = []
-    for g in range(m.ngeom):
-        obj = int(world.geom_obj[g])
-        if obj > 0:
-            out.append(obj)
-        elif g == world.cup_geom:
-            out.append(_CUP)
-        elif int(m.geom_bodyid[g]) == 0:
-            out.append(_TABLE)
-        else:
-            out.append(_LINK)
-    return out
-
-
-class ContactWatch:
-    """New contacts of the robot and its load during one move (see the module docstring)."""
-
-    def __init__(self, world: World, owners: list[int], allowed: Iterable[tuple[int, int]] = ()) -> None:
-        self._world = world
-        self._owner = owners
-        self._held = world.suction.held
-        self._start = self._pairs() | set(allowed)
-        """What may touch: the contacts now, and ``allowed`` (those the last move ended with, which
-        may part and touch again as this one leaves them; the object the cup has just let go)."""
-        self.hit: tuple[int, int] | None = None
-        """The first new contact, as (robot side: ``_CUP``, ``_LINK`` or the held obj_id; the other
-        side's owner code)."""
-
-    def _relevant(self, g1: int, g2: int) -> tuple[int, int] | None:
-        o1, o2, held = self._owner[g1], self._owner[g2], self._held
-        for a, b in ((o1, o2), (o2, o1)):
-            if a in (_CUP, _LINK) and b not in (_CUP, _LINK):
-                if held is not None and a == _CUP and b == held:
-                    continue
-                return a, b
-            if held is not None and a == held and b not in (_CUP, held):
-                return a, b
-        return None
-
-    def _pairs(self) -> set[tuple[int, int]]:
-        d = self._world.data
-        out = set()
-        for g1, g2 in d.contact.geom[: d.ncon].tolist():
-            pair = self._relevant(g1, g2)
-            if pair is not None:
-                out.add(pair)
-        return out
-
-    def new_contact(self) -> bool:
-        """Whether a contact exists now that did not at the start (kept in :attr:`hit`); called
-        every physics step of a move."""
-        d = self._world.data
-        n = d.ncon
-        if n == 0:
-            return False
-        for g1, g2 in d.contact.geom[:n].tolist():
-            pair = self._relevant(g1, g2)
-            if pair is not None and pair not in self._start:
-                self.hit = pair
-                return True
-        return False
-
-    def ending(self) -> set[tuple[int, int]]:
-        """The contacts at the end of the move (its stopping contact included), for the next move."""
-        return self._pairs() | ({self.hit} if self.hit is not None else set())
-
-    def tool_contact(self) -> bool:
-        """Whether :attr:`hit` is the tool's own contact: the cup's with nothing held, the carried
-        object's when one is held."""
-        if self.hit is None:
-            return False
-        return self.hit[0] == (_CUP if self._held is None else self._held)
 
 
 class RobotDriver:
@@ -144,7 +65,6 @@ class RobotDriver:
     def __init__(self, api: PlannerInterface, name_of: Callable[[int], str | None]) -> None:
         self._api = api
         self._name_of = name_of
-        self._owners = _owners(api.ctx.world)
         self._gripped: tuple[int, np.ndarray, np.ndarray] | None = None
         """Perceived mode: (the perceived object gripped, its centre then, the tip then)."""
         self._recent: set[tuple[int, int]] = set()
@@ -296,7 +216,7 @@ class RobotDriver:
         ctx.check_budget(ctx.budget.max_primitives * MOVES_PER_PRIMITIVE, "low-level moves")
         w = self.world
         start, steps0, t0 = w.tip_pose()[0], w.steps, w.time
-        watch = ContactWatch(w, self._owners, self._recent)
+        watch = ContactWatch(w, self._recent)
         try:
             status = run(watch)
         finally:
@@ -320,9 +240,9 @@ class RobotDriver:
         return touched
 
     def _collision_text(self, fn: str, watch: ContactWatch, at: np.ndarray) -> str:
-        own, other = watch.hit if watch.hit is not None else (_LINK, _TABLE)
-        who = {_CUP: "the suction cup", _LINK: "an arm link"}.get(own, "the carried object")
-        if other == _TABLE:
+        own, other = watch.hit if watch.hit is not None else (LINK, TABLE)
+        who = {CUP: "the suction cup", LINK: "an arm link"}.get(own, "the carried object")
+        if other == TABLE:
             what = "the table"
         else:
             name = self._name_of(other)
@@ -345,7 +265,7 @@ class RobotDriver:
         w = self.world
         was = w.suction.release()
         if was is not None:
-            self._recent.add((_CUP, was))
+            self._recent.add((CUP, was))
         w.step(self.motion.cfg.release_dwell_steps)
         scene = self._perceiving()
         if scene is not None and was is not None:
