@@ -297,7 +297,7 @@ class Motion:
         target = np.eye(4)
         target[:3, :3] = tool_rotation(yaw)
         target[:3, 3] = pos
-        out = []
+        out: list[np.ndarray] = []
         for sol in self.ik._solver.inverse_kinematics_with_tcp(target, self.ik._tcp):
             q = np.asarray(sol, float)
             if not np.all(np.isfinite(q)):
