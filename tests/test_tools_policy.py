@@ -176,10 +176,18 @@ def test_multi_sends_the_feedback_after_the_tool_messages(server: StubLLMServer)
     assert result.llm.attempts[0].feedback == last[-1]["content"] and result.llm.interaction == "multi"
 
 
-def test_a_model_without_tool_calling_fails_at_start_up_naming_it(server: StubLLMServer) -> None:
+def test_a_model_without_tool_calling_fails_at_start_up_naming_it(server: StubLLMServer, tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    from capmj.bench.cli import main
+
     with pytest.raises(ToolCallingUnsupported, match="gpt-3.5-turbo-instruct"):
         LLMAgent(LLMConfig("gpt-3.5-turbo-instruct"), LLMAgentOptions(policy="tools"))
     LLMAgent(LLMConfig("gpt-3.5-turbo-instruct"))  # the code policy takes it
+    # the bench stops before any episode or request
+    assert main(["--agent", "llm", "--model", "gpt-3.5-turbo-instruct", "--policy", "tools", "--tasks", TASK,
+                 "--seeds", str(SEED), "--out", str(tmp_path / "run"), "--workers", "0", "--no-probe"]) == 2
+    assert "'gpt-3.5-turbo-instruct' has none" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
     # a server that refuses the tools: the episode's provider failure names the model
     server.script(Reply.error(400, "tools param requires --jinja flag"))
     result = episode(agent(server))
