@@ -19,7 +19,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
@@ -75,13 +75,16 @@ _NOT_LITERAL = object()
 @dataclass(frozen=True)
 class Answer:
     """One answer of the model, parsed once: its code, the syntax tree of the whole code (None when
-    it has no code or does not parse), else the trees of its ``judge``/``reason``/``wrong`` lines
-    parsed one by one (a broken block still yields its verdict lines)."""
+    it has no code or does not parse) and the calls of a bare name in it, else the trees of its
+    ``judge``/``reason``/``wrong`` lines parsed one by one (a broken block still yields its verdict
+    lines)."""
 
     text: str
     code: str | None
     tree: ast.Module | None
     lines: tuple[ast.Module, ...] = ()
+    named: tuple[tuple[str, ast.Call], ...] = ()
+    """``(name, call)`` for every call of a bare name in the whole code, in :func:`ast.walk` order."""
 
     @classmethod
     def read(cls, text: str) -> Answer:
@@ -90,7 +93,7 @@ class Answer:
         except PlanError:
             return cls(text, None, None)
         try:
-            return cls(text, code, ast.parse(code))
+            tree = ast.parse(code)
         except (SyntaxError, ValueError):
             lines = []
             for line in code.splitlines():
@@ -101,14 +104,15 @@ class Answer:
                     except (SyntaxError, ValueError):
                         continue
             return cls(text, code, None, tuple(lines))
+        return cls(text, code, tree, named=tuple(named_calls(tree)))
 
     @property
     def trees(self) -> tuple[ast.Module, ...]:
         return (self.tree,) if self.tree is not None else self.lines
 
-    def calls(self, name: str | None = None) -> Iterator[tuple[str, ast.Call]]:
+    def calls(self, name: str | None = None) -> list[tuple[str, ast.Call]]:
         """The calls of a bare name in the whole code (only those of ``name`` when given)."""
-        return named_calls(self.tree, name) if self.tree is not None else iter(())
+        return [(n, call) for n, call in self.named if name in (None, n)]
 
     def literals(self, name: str) -> list[Any]:
         """The values of every ``name = <literal>`` assignment, nested ones too (a non-literal value
