@@ -352,7 +352,10 @@ def load_folders(dirs: Sequence[str | Path]) -> tuple[list[EpisodeRecord], dict[
         if not f.is_file():
             raise ConfigError(f"{d} is not a result folder (no {EPISODES})")
         records, _ = read_records(f)
-        per_folder.append((d, records, _options_suffix(load_json(d / CONFIG))))
+        cfg = load_json(d / CONFIG)
+        rank = {c.get("name"): i for i, c in enumerate(effective_args(cfg or {}).get("configs") or [])}
+        records.sort(key=lambda r: rank.get(r.config, len(rank)))  # a --configs run's order: its first is the baseline
+        per_folder.append((d, records, _options_suffix(cfg)))
     base: dict[tuple[int, tuple[str, str | None] | str], str] = {}
     for i, (d, records, suffix) in enumerate(per_folder):
         for r in records:
