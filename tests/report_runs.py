@@ -4,7 +4,8 @@ screenshot in docs/): the oracle, and the LLM agent scripted through the tests' 
 The scripted LLM run is a fixture, never a result: on task A the first planner request gets (unless
 told otherwise) a plan that stacks one block and then names an object that does not exist (a failed episode,
 label ``unknown_object``), every later one the stub solver's plan (solved); a planner request of
-any other task is answered HTTP 400, which the client does not retry (a provider failure).
+any other task is answered HTTP 400, which the client does not retry (a provider failure: an
+anomaly, label ``llm_error``).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ def _responder(broken_first: bool) -> Any:
     planned = [0]
 
     def respond(request: dict[str, Any]) -> Reply:
-        found = _GOAL.findall(prompt_text(request))
+        found = _GOAL.findall(prompt_text(request).rstrip().splitlines()[-1])  # the query: the prompt's last line
         if not found:
             return Reply.error(400, "stub: this server only plans task A")
         with lock:

@@ -1,7 +1,8 @@
 """``python -m capmj.bench export RUN --bundle OUT.zip``: the evidence bundle of a small real run.
 
 The run (tests/report_runs.py, made once for the module) is the LLM agent scripted through the
-stub server on task A × two seeds, the first of which fails.  The bundle must hold what a
+stub server on task A and task H × two seeds: on A the first plan fails and the second succeeds,
+on H the server answers HTTP 400 (two anomalies, half the run: the page's first line says so).  The bundle must hold what a
 leaderboard asks for and reproduce its own summary from its own files.
 """
 
@@ -21,12 +22,13 @@ from capmj.bench.cli import main
 from capmj.bench.report import report
 
 LABEL = "llm openai/stub (reporter=none)"
+OTHER = "put-block-into-matching-bowl"
 
 
 @pytest.fixture(scope="module")
 def bundle(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     root = tmp_path_factory.mktemp("bundle")
-    run = llm_run(root / "run", [TASK], "10001,10003")
+    run = llm_run(root / "run", [TASK, OTHER], "10001,10003")
     out = root / "evidence.zip"
     assert main(["export", str(run), "--bundle", str(out)]) == 0
     return run, out
@@ -63,14 +65,17 @@ def test_the_bundle_holds_the_evidence_a_leaderboard_asks_for(bundle: tuple[Path
     assert versions["run"]["capmj"] == versions["bundle"]["capmj"] == harness["capmj"]
     cell = facts["configurations"][LABEL]
     records = [json.loads(x) for x in (run / "episodes.jsonl").read_text().splitlines()]
-    assert (cell["episodes"], cell["successes"]) == (2, 1) == (len(records), sum(r["success"] for r in records))
+    assert (cell["episodes_run"], cell["successes"]) == (4, 1) == (len(records), sum(r["success"] for r in records))
+    assert (cell["episodes"], cell["inconclusive"], facts["inconclusive"]) == (2, 2, 2)  # H's provider failures apart
     assert cell["tokens"] == sum(r["llm"]["spend"]["tokens"] for r in records) > 0
-    assert cell["llm_calls"] == 2 and cell["stopped_by_limit"] == 0 and cell["failures"] == {"unknown_object": 1}
-    assert cell["per_solved_episode"]["tokens"] == cell["tokens"]  # one episode solved
+    assert cell["stopped_by_limit"] == 0 and cell["failures"] == {"unknown_object": 1}
+    assert cell["anomaly_labels"] == {"llm_error": 2}
+    assert cell["per_solved_episode"]["tokens"] == cell["tokens"]  # one episode solved; H spent no token
     command = "python -m capmj.bench " + shlex.join(config["argv"])
     assert facts["reproduce"] == [command] and command in script.splitlines()
     assert f"git checkout {harness['git_revision']}" in script
-    assert 'class="failed-episode"' in page and "data:image/png;base64," in page
+    assert page.count('class="failed-episode"') == 3 and "data:image/png;base64," in page
+    assert 'id="headline"' in page and 'id="anomaly-count" data-count="2"' in page
 
 
 def test_the_bundle_rebuilds_its_summary_from_its_own_files(bundle: tuple[Path, Path], tmp_path: Path) -> None:

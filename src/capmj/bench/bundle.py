@@ -79,8 +79,9 @@ def reproduce_script(cfg: Mapping[str, Any]) -> str:
 
 
 def evidence(summary: Mapping[str, Any], cfg: Mapping[str, Any]) -> dict[str, Any]:
-    """``evidence.json`` without its file list: per configuration the episodes, successes, rate and
-    Wilson interval, anomalies (inconclusive: harness failures, when the summary counts them),
+    """``evidence.json`` without its file list: per configuration the episodes run, the agent's
+    episodes (anomalies excluded when the summary counts them), successes, rate and Wilson interval,
+    anomalies (inconclusive: harness failures, when the summary counts them),
     episodes stopped by a limit, LLM tokens, calls and cost; the model, the harness revision,
     the task stamp and the reproduction commands."""
     view = profile_view(summary)
@@ -96,10 +97,12 @@ def evidence(summary: Mapping[str, Any], cfg: Mapping[str, Any]) -> dict[str, An
         usage = legacy.get("llm_usage") or {}
         configs[label] = {
             **(summary.get("configs") or {}).get(label, {}),
+            "episodes_run": cell["n"] + (cell.get("anomalies") or 0),
             "episodes": cell["n"], "successes": cell["successes"], "success_rate": cell["success_rate"],
             "ci95": cell["ci95"], "inconclusive": cell.get("anomalies"),
             "stopped_by_limit": sum(failures.get(lab, 0) for lab in STOPPED_LABELS),
-            "failures": failures, "llm_calls": usage.get("calls"), "tokens": usage.get("tokens"),
+            "failures": failures, "anomaly_labels": legacy.get("anomaly_labels"),
+            "llm_calls": usage.get("calls"), "tokens": usage.get("tokens"),
             "cost_usd": usage.get("cost_usd") if usage.get("cost_known", True) else None,
             "per_episode": eff.get("per_episode"), "per_solved_episode": eff.get("per_solved"),
         }

@@ -199,8 +199,8 @@ def _failures(summary: Mapping[str, Any], labels: Sequence[str]) -> str:
                  + "".join(f'<td{_attrs(failure=f, count=fails.get(f, 0))}>{fails.get(f, 0)}</td>' for f in present)
                  + "</tr>")
     return ('<section id="failures"><h2>Failures by cause</h2>'
-            "<p>Failed episodes per failure label (docs/failures.md says how each is decided; the anomalies "
-            "below are among them).</p>"
+            "<p>Failed episodes per failure label (docs/failures.md says how each is decided). A summary that "
+            "counts anomalies apart lists only the agent's failures here, the anomalies below.</p>"
             f'<table id="failures-table"><tr><th>configuration</th><th>failed</th>{head}</tr>{rows}</table></section>')
 
 
