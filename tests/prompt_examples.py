@@ -22,7 +22,7 @@ from capmj.tasks.protocol import Scene
 from capmj.tasks.registry import get_task
 
 HELPER_LMPS = ("parse_obj_name", "parse_position", "parse_question", "parse_function", "parse_completion")
-ALL_LMPS = ("planner",) + HELPER_LMPS
+ALL_LMPS = ("planner", "planner_low") + HELPER_LMPS
 
 
 def scene_specs(example: Example) -> tuple[ObjectSpec, ...]:
