@@ -29,8 +29,8 @@ from capmj.agents.prompt_files import prompts_dir
 from capmj.agents.sandbox import extract_code
 from capmj.errors import ConfigError, PlanError
 
-__all__ = ["SOURCES", "Answer", "Gate", "Reading", "Report", "ask_for_verdict", "direct_verdict", "gated", "names_of",
-           "parse_verdict", "parse_wrong", "record_reading", "scene_listing"]
+__all__ = ["SOURCES", "Answer", "Gate", "Reading", "Report", "ask_for_verdict", "direct_verdict", "gated", "literal_reading",
+           "names_of", "parse_verdict", "record_reading", "scene_listing"]
 
 SOURCES = ("code", "repair", "direct", "unknown")
 """Where a verdict came from (see the module docstring), in the order they are tried."""
@@ -163,11 +163,6 @@ def _literals(tree: ast.AST, name: str) -> list[Any]:
 def parse_verdict(text: str) -> tuple[bool | None, str, str | None]:
     """``(judge, reason, problem)`` of a reporter answer (:meth:`Answer.verdict`); never executes anything."""
     return Answer.read(text).verdict()
-
-
-def parse_wrong(text: str) -> tuple[str, ...]:
-    """The names of a literal ``wrong = [...]`` list in an answer (empty when there is none)."""
-    return Answer.read(text).wrong()
 
 
 def names_of(value: Any) -> tuple[str, ...]:

@@ -92,14 +92,10 @@ says "stack" asks for a stack or layers, "structure" or "layer" for layers (the 
 for ``require_layers``), "circle" or "ring" for a circle, "alternat..." for alternating colours,
 "in/on/into the ... zone/bowl" for where the objects must be."""
 
-def _answer(code: Answer | str) -> Answer:
-    return code if isinstance(code, Answer) else Answer.read(code)
-
-
 def uncovered(code: Answer | str, goal: str) -> str | None:
     """Which relation the goal names and the check never asks for (a sentence for the repair request), or
     None (also when the code does not parse: the sandbox reports it)."""
-    answer = _answer(code)
+    answer = code if isinstance(code, Answer) else Answer.read(code)
     if answer.tree is None:
         return None
     asked: set[str] = set()
