@@ -228,6 +228,20 @@ def test_every_function_the_planner_prompt_documents_has_a_schema_and_vice_versa
     assert not {n for n in re.findall(r"\b([a-z_]+)\(", text)} - set(TOOL_FUNCTIONS)
 
 
+def test_every_planner_api_function_has_typed_parameters_and_a_schema() -> None:
+    import typing
+
+    from capmj.agents.api.plan_functions import API_FUNCTIONS
+    from capmj.agents.api.tool_schemas import function_schema
+
+    for name in API_FUNCTIONS:
+        fn = getattr(PlanFunctions, name)
+        hints = typing.get_type_hints(fn)
+        untyped = [p for p in inspect.signature(fn).parameters if p != "self" and p not in hints]
+        assert not untyped, (name, untyped)
+        assert function_schema(name)["function"]["name"] == name
+
+
 def test_annotations_become_json_schema_types() -> None:
     assert json_schema(str | int) == {"anyOf": [{"type": "string"}, {"type": "integer"}]}
     assert json_schema(tuple[float, float]) == {"type": "array", "items": {"type": "number"}, "minItems": 2,

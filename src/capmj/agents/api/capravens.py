@@ -29,7 +29,7 @@ class CapRavensFunctions:
 
     _api: PlannerInterface
 
-    def denormalize_xy(self, pos, size=None):
+    def denormalize_xy(self, pos: list[float], size: list[float] | None = None) -> np.ndarray:
         """CapRavens' name for ``denormalize``: normalised [u, v] → world [x, y] (a numpy array,
         as there).  With ``size`` = (sx, sy) the result is an offset inside a box of that size
         centred on the origin instead: [v sx − sx/2, u sy − sy/2] (the original's formula)."""
@@ -41,7 +41,7 @@ class CapRavensFunctions:
         sx, sy = (float(v) for v in size[:2])
         return np.array([arr[1] * sx - sx / 2, arr[0] * sy - sy / 2])
 
-    def denormalize_bbox(self, bbox):
+    def denormalize_bbox(self, bbox: tuple[float, float, float, float]) -> list[float]:
         """A normalised area (umin, vmin, umax, vmax) → the world area (xmin, ymin, xmax, ymax), as
         ``get_random_free_pos(area=...)`` takes it (CapRavens' ``denormalize_bbox``)."""
         if not is_vector(bbox, (4,)):
@@ -51,7 +51,7 @@ class CapRavensFunctions:
         x1, y1 = denormalize_uv(umax, vmin)
         return [x0, y0, x1, y1]
 
-    def is_obj_visible(self, obj) -> bool:
+    def is_obj_visible(self, obj: str | int) -> bool:
         """Whether the scene has an object of that name (or obj_id): True exactly when the other
         functions accept the name, near-miss names included (CapRavens' ``is_obj_visible``)."""
         try:
@@ -60,7 +60,7 @@ class CapRavensFunctions:
             return False
         return True
 
-    def bbox_contains_pt(self, container_name, obj_name) -> bool:
+    def bbox_contains_pt(self, container_name: str | int, obj_name: str | int) -> bool:
         """Whether ``obj_name``'s centre lies inside ``container_name``'s footprint, seen from
         above: a zone's square turned by its yaw (capmj's one rule for "in the zone", the one
         the tasks judge by), a bowl's disc, a block's turned square.  Height is not checked, so a
