@@ -258,6 +258,16 @@ def test_a_plan_error_at_the_low_level_names_its_class() -> None:
         run_code("move_linear([0.5, 0.0, -0.1])", dict(f))
 
 
+def test_llm_options_check_the_level() -> None:
+    from capmj.agents.llm_agent.options import LLMAgentOptions
+
+    assert (LLMAgentOptions(api="low", examples="none").api, LLMAgentOptions().examples) == ("low", "full")
+    with pytest.raises(ConfigError, match="valid levels: high, low"):
+        LLMAgentOptions(api="lowest")
+    with pytest.raises(ConfigError, match="--api low runs with --policy code"):
+        LLMAgentOptions(api="low", policy="tools")
+
+
 def test_the_llm_agent_plans_at_the_low_level_without_examples() -> None:
     """--agent llm --api low --examples none against the scripted server: the prompt sent is the
     low level's without examples, and the answered low-level plan runs to success."""

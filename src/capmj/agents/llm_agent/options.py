@@ -125,6 +125,9 @@ class LLMAgentOptions:
             raise ConfigError(f"unknown API level {self.api!r}; valid levels: {', '.join(PLANNER_PROMPTS)}")
         if self.examples not in EXAMPLES:
             raise ConfigError(f"unknown examples choice {self.examples!r}; valid: {', '.join(EXAMPLES)}")
+        if self.api != "high" and self.policy == "tools":
+            raise ConfigError("--policy tools offers the high-level API's functions as tools; --api low runs with "
+                              "--policy code")
         if self.reporter_prompt not in REPORTER_PROMPTS:
             raise ConfigError(f"unknown reporter prompt {self.reporter_prompt!r}; valid: {', '.join(REPORTER_PROMPTS)}")
         if self.reporter_prompt != "thesis" and self.reporter == "vlm":
