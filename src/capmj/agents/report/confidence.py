@@ -74,8 +74,7 @@ def low_confidence_reasons() -> dict[str, str]:
     reasons = {rule.key: rule.why for rule in RULES}
     for prompts in REPORTER_TABLE.values():
         for entry in prompts.values():
-            gates = getattr(load_reporter(entry.target), "gates", ())
-            reasons.update({gate.key: gate.why for gate in gates if gate.keeps})
+            reasons.update({gate.key: gate.why for gate in load_reporter(entry.target).gates if gate.keeps})
     return reasons
 
 

@@ -14,12 +14,12 @@ from __future__ import annotations
 import functools
 import importlib
 from pathlib import Path
-from typing import Protocol, cast
+from typing import Any, Protocol, cast
 
 from capmj.agents.base import EpisodeContext
 from capmj.agents.choices import REPORTER_PROMPTS, REPORTER_TABLE, REPORTERS
 from capmj.agents.lmp.session import LMPSession
-from capmj.agents.report.verdict import Report
+from capmj.agents.report.verdict import Gate, Report
 from capmj.errors import ConfigError
 
 __all__ = ["Reporter", "ReporterClass", "load_reporter", "make_reporter"]
@@ -30,6 +30,9 @@ class Reporter(Protocol):
 
     mode: str
     """``text`` or ``vlm``: the :attr:`Report.mode` of its reports."""
+    gates: tuple[Gate[Any], ...]
+    """The gates its answers pass (:class:`~capmj.agents.report.verdict.Gate`; empty for none): the
+    low-confidence reasons are derived from them."""
 
     def start(self, ctx: EpisodeContext) -> None:
         """Before the first attempt acts: capture what the judging needs of the initial scene."""
@@ -45,6 +48,8 @@ class Reporter(Protocol):
 class ReporterClass(Protocol):
     """What :data:`~capmj.agents.choices.REPORTER_TABLE` names: a reporter class, built with the
     prompt directory (``None``: the packaged prompts)."""
+
+    gates: tuple[Gate[Any], ...]
 
     def __call__(self, prompt_directory: Path | str | None = None) -> Reporter: ...
 

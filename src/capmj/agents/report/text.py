@@ -20,7 +20,8 @@ import numpy as np
 from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp.session import Draft, LMPCall, LMPSession
 from capmj.agents.report.text_env import PREBOUND, reporter_env
-from capmj.agents.report.verdict import Answer, Reading, Report, ask_for_verdict, direct_verdict, names_of, record_reading
+from capmj.agents.report.verdict import (Answer, Gate, Reading, Report, ask_for_verdict, direct_verdict, names_of,
+                                         record_reading)
 from capmj.errors import PlanError, describe
 
 __all__ = ["TextReporter", "failing_line", "plan_check", "reading_of"]
@@ -57,6 +58,7 @@ class TextReporter:
     """``parse_completion`` over the settled scene: code, one repair, then the direct verdict."""
 
     mode = "text"
+    gates: tuple[Gate[Any], ...] = ()
 
     def __init__(self, prompt_directory: Any = None) -> None:
         """``prompt_directory`` is the session's too: its prompt is read through the session."""

@@ -18,7 +18,7 @@ import numpy as np
 from capmj.agents.base import JUDGE_SETTLE_STEPS
 from capmj.agents.lmp.session import LMPSession
 from capmj.agents.prompt_files import load_system_prompt, prompts_dir
-from capmj.agents.report.verdict import Report, ask_for_verdict, direct_verdict, literal_reading
+from capmj.agents.report.verdict import Gate, Report, ask_for_verdict, direct_verdict, literal_reading
 from capmj.errors import CapmjError, ConfigError, describe
 
 
@@ -27,6 +27,7 @@ class VLMReporter:
 
     mode = "vlm"
     camera = "front"
+    gates: tuple[Gate[Any], ...] = ()
 
     def __init__(self, prompt_directory: Any = None) -> None:
         self.directory = prompt_directory
