@@ -215,7 +215,8 @@ class Motion:
         return self.move_through([(pos, yaw)], speed, stop, slow_last)[:2]
 
     def move_through(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None,
-                     stop: Callable[[], bool] | None = None, slow_last: float = 0.0) -> tuple[str, int, int]:
+                     stop: Callable[[], bool] | None = None, slow_last: float = 0.0,
+                     contact_before: float = 0.0) -> tuple[str, int, int]:
         """Move the tip along straight lines through each ``(pos, yaw)`` in turn, rounding each
         corner within ``blend`` (the next line starts while the last one brakes, as a UR
         controller's blend radius does) instead of stopping there.  ``stop`` and ``slow_last``
@@ -225,7 +226,9 @@ class Motion:
         With ``plan_collisions`` every line is checked for collisions first (:meth:`clear_legs`):
         one that is not clear is replaced by a joint-space path around the obstacle, and
         :class:`~capmj.errors.MotionPlanningError` is raised, before anything moves, when there is
-        none.  A guarded last line (``stop`` given) may end touching what is under its end.
+        none.  A guarded last line (``stop`` given) may end touching what is under its end;
+        ``contact_before`` is how far before its end the contact is expected (a descent's
+        overshoot), the part beyond which is not checked for the arm's links.
 
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
@@ -233,7 +236,7 @@ class Motion:
         plans = self.plan_lines(points, speed, slow_last)
         if isinstance(plans, int):
             return "unreachable", 0, plans
-        plans = self.clear_legs(plans, guarded=stop is not None)
+        plans = self.clear_legs(plans, guarded=stop is not None, contact_before=contact_before)
         status, steps = self.run_legs(plans, np.asarray(points[-1][0], float), stop)
         return status, steps, -1
 
@@ -359,7 +362,8 @@ class Motion:
             parts.append(a + s[:, None] * (b - a))
         return SegmentPlan(np.concatenate(parts), cfg.ik_dt)
 
-    def clear_legs(self, plans: list[SegmentPlan], guarded: bool = False) -> list[SegmentPlan]:
+    def clear_legs(self, plans: list[SegmentPlan], guarded: bool = False,
+                   contact_before: float = 0.0) -> list[SegmentPlan]:
         """The legs of one move (consecutive plans, each starting where the last ends), each
         checked for collisions densely (:class:`~capmj.sim.collision.CollisionChecker`) and, when
         not clear, replaced by a joint-space path around the obstacle (:mod:`capmj.sim.planner`).
@@ -369,7 +373,9 @@ class Motion:
         object may touch what they touch where that leg ends (the object being picked, the
         surface being placed on) and the table, and pass anything else closer than the clearance
         (a placement next to its neighbours) without pressing into it; that last leg is never replaced (its end is the
-        contact the move is for).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg
+        contact the move is for), and it is checked only up to ``contact_before`` metres of path
+        before its end, where the contact is expected (a guarded move stops there; the rest is the
+        margin it may go on by when the surface is lower).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg
         is not clear and cannot be replaced.  Records each leg in :attr:`paths`.  With
         ``plan_collisions`` off the legs are returned unchecked (and recorded).
         """
@@ -381,11 +387,11 @@ class Motion:
             return plans
         t0 = time.perf_counter()
         try:
-            return self._clear_legs(plans, guarded)
+            return self._clear_legs(plans, guarded, contact_before)
         finally:
             self.planning_s += time.perf_counter() - t0
 
-    def _clear_legs(self, plans: list[SegmentPlan], guarded: bool) -> list[SegmentPlan]:
+    def _clear_legs(self, plans: list[SegmentPlan], guarded: bool, contact_before: float) -> list[SegmentPlan]:
         from capmj.sim.collision import TABLE
 
         chk = self.checker
@@ -398,7 +404,7 @@ class Motion:
             last_guarded = guarded and i == len(plans) - 1
             if last_guarded:
                 allow = allow | Allowance(tool_may_touch=chk.tool_owners(plan.qs[-1]) | {TABLE}, tool_near=True)
-            hit = chk.path_collision(plan.qs, allow)
+            hit = chk.path_collision(_until_contact(plan, contact_before) if last_guarded else plan.qs, allow)
             if hit is None:
                 out.append(plan)
                 records.append((plan, False))
@@ -438,3 +444,17 @@ class Motion:
         qs = plan.qs if planned else plan.qs[[0, -1]]
         tip = tuple(tuple(float(v) for v in self.ik.tip_position(q)) for q in qs)
         self.paths.append(PathRecord(qs.copy(), tip, planned))  # type: ignore[arg-type]
+
+
+def _until_contact(plan: SegmentPlan, before_end: float) -> np.ndarray:
+    """The joint samples of a line up to ``before_end`` metres of path before its end (where a
+    guarded move expects its contact); all of them for a joint-space plan or no margin."""
+    if plan.a is None or before_end <= 0 or plan.extent <= before_end:
+        return plan.qs
+    cut = 1.0 - before_end / plan.extent
+    k = int(np.searchsorted(plan.a, cut, side="right"))  # samples at or before the cut
+    if k >= len(plan.qs):
+        return plan.qs
+    a0, a1 = plan.a[k - 1], plan.a[k]
+    f = 0.0 if a1 <= a0 else (cut - a0) / (a1 - a0)
+    return np.concatenate([plan.qs[:k], (plan.qs[k - 1] + f * (plan.qs[k] - plan.qs[k - 1]))[None]])

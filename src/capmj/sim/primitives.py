@@ -299,7 +299,8 @@ class Primitives:
                 legs = [(point, yaw) for point in via] + [(np.array([tip_xy[0], tip_xy[1], place_z]), new_yaw),
                                                           (down, new_yaw)]
                 lifts = len(via)
-                status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot)
+                status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot,
+                                                contact_before=cfg.overshoot)
         if status == "unreachable" and leg == len(legs) - 1:  # no descent: carry over the place point, let go there
             status, _, leg = m.move_through(legs[:-1])
         if status == "unreachable":
@@ -321,8 +322,9 @@ class Primitives:
         MotionPlanningError, or returns the first outcome, when no posture helps."""
         m = self.motion
         first: MotionPlanningError | tuple[str, int, int]
+        depth = self.cfg.overshoot  # the descent's expected contact lies this far before its end
         try:
-            first = m.move_through(legs, stop=stop, slow_last=slow_last)
+            first = m.move_through(legs, stop=stop, slow_last=slow_last, contact_before=depth)
             if first[0] != "unreachable" or first[2] < len(legs) - 2:
                 return first
         except MotionPlanningError as exc:
@@ -339,7 +341,8 @@ class Primitives:
             if isinstance(descent, int):
                 continue
             try:
-                checked = m.clear_legs([*before, m.joint_plan(np.array([q_here, q_alt])), *descent], guarded=True)
+                checked = m.clear_legs([*before, m.joint_plan(np.array([q_here, q_alt])), *descent], guarded=True,
+                                       contact_before=depth)
             except MotionPlanningError:
                 continue
             status, steps = m.run_legs(checked, np.asarray(down, float), stop)
