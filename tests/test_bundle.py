@@ -74,7 +74,8 @@ def test_the_bundle_holds_the_evidence_a_leaderboard_asks_for(bundle: tuple[Path
     command = "python -m capmj.bench " + shlex.join(config["argv"])
     assert facts["reproduce"] == [command] and command in script.splitlines()
     assert f"git checkout {harness['git_revision']}" in script
-    assert page.count('class="failed-episode"') == 3 and "data:image/png;base64," in page
+    assert page.count('class="failed-episode agent"') == 1 and "data:image/png;base64," in page
+    assert page.count('class="failed-episode anomaly"') == 2  # H's provider failures, marked apart
     assert 'id="headline"' in page and 'id="anomaly-count" data-count="2"' in page
 
 

@@ -190,4 +190,4 @@ def test_a_run_without_thumbnails_profile_or_anomalies_still_gets_a_page(runs: t
     html = render_page(summary, [old])
     assert 'data-source="tasks"' in html
     assert "no thumbnail" in html and "no anomaly accounting" in html
-    assert html.count('class="failed-episode"') == 1
+    assert html.count('class="failed-episode agent"') == 1

@@ -49,6 +49,8 @@ article.failed-episode{border:1px solid #ccc;border-radius:6px;padding:.6em;back
 article.failed-episode h3{margin:.1em 0 .4em;font-size:1em}
 article.failed-episode img{width:320px;max-width:100%;height:auto;image-rendering:pixelated;border:1px solid #bbb}
 .label{display:inline-block;background:#a40;color:#fff;border-radius:3px;padding:0 .4em;font-size:.85em}
+.label.anomaly{background:#666}article.failed-episode.anomaly{background:#f0f0f0;border-style:dashed}
+td.text{text-align:left}
 pre{background:#f0f0f0;padding:.5em;overflow-x:auto;font-size:.8em;max-height:24em}
 pre.error{white-space:pre-wrap;word-break:break-word;background:#fbeeee}
 code.cmd{display:block;background:#222;color:#eee;padding:.4em;font-size:.8em;word-break:break-all}
@@ -235,9 +237,9 @@ def _anomalies(summary: Mapping[str, Any]) -> str:
         labels = "".join(f"<tr{_attrs(label=k, count=v)}><td>{_e(k)}</td><td>{v}</td></tr>"
                          for k, v in (found.get("labels") or {}).items())
         listed = "".join(f"<tr{_attrs(config=str(a.get('config')), task=str(a.get('task')), seed=a.get('seed'))}>"
-                         f"<td>{_e(a.get('config'))}</td><td>{_e(task_label(str(a.get('task'))))}</td>"
-                         f"<td>{_e(a.get('seed'))}</td><td>{_e(a.get('label'))}</td>"
-                         f"<td class=\"error\">{_e(a.get('error') or '')}</td></tr>" for a in found.get("list") or [])
+                         f"<td>{_e(a.get('config'))}</td><td class=\"text\">{_e(task_label(str(a.get('task'))))}</td>"
+                         f"<td>{_e(a.get('seed'))}</td><td class=\"text\">{_e(a.get('label'))}</td>"
+                         f"<td class=\"text\">{_e(a.get('error') or '')}</td></tr>" for a in found.get("list") or [])
         body = (f'<p id="anomaly-count"{_attrs(count=found["count"], episodes=found.get("episodes"), share=found.get("share"))}>'
                 f"{found['count']} of {found.get('episodes')} episodes ({_pct(found.get('share'))}) are anomalies "
                 f"(threshold {_pct(found.get('threshold'))}).</p>"
@@ -247,10 +249,29 @@ def _anomalies(summary: Mapping[str, Any]) -> str:
     return f'<section id="anomalies"><h2>Anomalies (harness failures, not the agent\'s)</h2>{body}</section>'
 
 
+def _short(value: Any) -> str:
+    """The first 12 hex digits of a stamp (the text summaries show; the data-* attribute holds all)."""
+    return "—" if not value else str(value)[:12]
+
+
 def _stamp(summary: Mapping[str, Any], configs: Mapping[str, Mapping[str, Any] | None]) -> str:
     out = ['<section id="stamp"><h2>Version stamp</h2>']
-    if summary.get("stamp") is not None:
-        out.append(f'<div id="task-stamp">{_generic(summary["stamp"])}</div>')
+    stamp = summary.get("stamp")
+    if isinstance(stamp, Mapping) and isinstance(stamp.get("tasks"), Mapping):
+        rows = "".join(f'<tr{_attrs(task=t, stamp=str((v or {}).get("stamp", "")))}><td>{_e(task_label(t))}</td>'
+                       f'<td><code>{_e(_short((v or {}).get("stamp")))}</code></td><td>{_e((v or {}).get("kind", ""))}</td>'
+                       "</tr>" for t, v in sorted(stamp["tasks"].items(), key=lambda kv: _order(kv[0])))
+        out.append(f'<p id="task-stamp"{_attrs(stamp=str(stamp.get("overall", "")))}>Task set stamp '
+                   f'<code>{_e(_short(stamp.get("overall")))}</code> (capmj {_e(stamp.get("capmj", "?"))}, MJCF '
+                   f'<code>{_e(_short(stamp.get("mjcf")))}</code>, prompts <code>{_e(_short(stamp.get("prompts")))}</code>); '
+                   "two runs are comparable on the tasks whose stamps match.</p>"
+                   f'<table id="task-stamps"><tr><th>task</th><th>stamp</th><th>kind</th></tr>{rows}</table>')
+    elif stamp is not None:
+        out.append(f'<div id="task-stamp">{_generic(stamp)}</div>')
+    else:
+        out.append('<p class="muted">No task stamp in this summary (a run made before stamps were recorded).</p>')
+    for line in summary.get("stamp_mismatches") or []:
+        out.append(f'<p class="warn stamp-mismatch">{_e(line)}</p>')
     for src, cfg in configs.items():
         manifest = (cfg or {}).get("manifest") or {}
         git = manifest.get("git") or {}
@@ -263,13 +284,16 @@ def _stamp(summary: Mapping[str, Any], configs: Mapping[str, Mapping[str, Any] |
     return "".join(out) + "</section>"
 
 
-def _card(ep: FailedEpisode) -> str:
+def _card(ep: FailedEpisode, anomaly: bool) -> str:
     thumb = (f'<img alt="final top-down view" src="data:image/png;base64,{base64.b64encode(ep.thumbnail).decode()}">'
              if ep.thumbnail else '<p class="muted no-thumb">no thumbnail (a run made before thumbnails, or '
              "rendering was unavailable)</p>")
-    parts = [f'<article class="failed-episode"{_attrs(config=ep.config, task=ep.task, seed=ep.seed, failure=ep.failure or "")}>',
+    kind = "anomaly" if anomaly else "agent"
+    label = f"anomaly: {ep.failure}" if anomaly else (ep.failure or "failed")
+    parts = [f'<article class="failed-episode {kind}"'
+             f'{_attrs(config=ep.config, task=ep.task, seed=ep.seed, failure=ep.failure or "", side=kind)}>',
              f"<h3>{_e(task_label(ep.task))} · seed {ep.seed} · {_e(ep.config)}</h3>",
-             f'<p><span class="label">{_e(ep.failure or "failed")}</span> progress {ep.progress:.2f}</p>', thumb]
+             f'<p><span class="label {kind}">{_e(label)}</span> progress {ep.progress:.2f}</p>', thumb]
     if ep.goal:
         parts.append(f"<p><b>Goal:</b> {_e(ep.goal)}</p>")
     if ep.error:
@@ -278,6 +302,8 @@ def _card(ep: FailedEpisode) -> str:
         parts.append("<ul class=\"diagnostics\">" + "".join(f"<li>{_e(d)}</li>" for d in ep.diagnostics) + "</ul>")
     word = "Turn" if ep.turns else "Attempt"
     for a in ep.attempts:
+        if not a.code and not a.feedback:
+            continue  # no plan came back (the error above says why)
         extra = []
         if a.error:
             extra.append(f'<pre class="error">{_e(a.error)}</pre>')
@@ -297,16 +323,22 @@ def _card(ep: FailedEpisode) -> str:
     return "".join(parts) + "</article>"
 
 
-def _gallery(episodes: Sequence[FailedEpisode]) -> str:
+def _gallery(episodes: Sequence[FailedEpisode], summary: Mapping[str, Any]) -> str:
+    """The failed episodes, the agent's first, then the anomalies (each group by configuration, task, seed)."""
+    listed = (summary.get("anomalies") or {}).get("list") or []
+    anomalous = {(str(a.get("config")), str(a.get("task")), a.get("seed")) for a in listed}
+    configs = {c: i for i, c in enumerate(dict.fromkeys(e.config for e in episodes))}
+    flagged = [(e, (e.config, e.task, e.seed) in anomalous) for e in episodes]
+    flagged.sort(key=lambda ea: (ea[1], configs[ea[0].config], _order(ea[0].task), ea[0].seed))
     if not episodes:
         return '<section id="gallery"><h2>Failure gallery</h2><p>No failed episode.</p></section>'
-    shown = episodes[:GALLERY_MAX]
+    shown = flagged[:GALLERY_MAX]
     more = (f"<p class=\"warn\">{len(episodes) - len(shown)} more failed episode(s) not shown.</p>"
             if len(episodes) > len(shown) else "")
     return (f'<section id="gallery"><h2>Failure gallery</h2><p>{len(episodes)} failed episode(s): the final '
             "top-down view (objects where the episode left them, arm left out), the failure label and message, "
             "the plan of each attempt, and the command that opens the episode's log.</p>"
-            f'{more}<div class="gallery">{"".join(_card(e) for e in shown)}</div></section>')
+            f'{more}<div class="gallery">{"".join(_card(e, a) for e, a in shown)}</div></section>')
 
 
 def _reproduce(configs: Mapping[str, Mapping[str, Any] | None]) -> str:
@@ -342,7 +374,7 @@ def render_page(summary: Mapping[str, Any], dirs: Sequence[str | Path], *,
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     body = [_header(summary, sources, view.configs, title), _profile(view), _bars(view),
             _comparisons(view), _efficiency(view), _failures(summary, view.configs), _anomalies(summary),
-            _gallery(failed_episodes(dirs)), _stamp(summary, configs), _reproduce(configs)]
+            _gallery(failed_episodes(dirs), summary), _stamp(summary, configs), _reproduce(configs)]
     warnings = summary.get("warnings") or []
     if warnings:
         body.insert(1, '<section id="warnings"><details><summary class="warn">'
