@@ -99,6 +99,7 @@ def test_a_pick_and_place_from_low_level_calls_is_logged_counted_and_recorded(lo
     moves = ctx.recorder.primitives
     assert [m["fn"] for m in moves] == ["move_to_pose", "move_until_contact", "move_to_pose", "move_until_contact"]
     assert moves[1]["contact"] is True and moves[3]["obj_id"] == 1 and all(m["ok"] for m in moves)
+    assert [m["status"] for m in moves] == ["ok", "contact", "ok", "contact"]
     assert all(m["planned"] == () for m in moves)  # nothing in the way: no path planned around anything
 
 

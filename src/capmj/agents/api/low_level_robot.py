@@ -225,11 +225,12 @@ class RobotDriver:
         touched = status == "stopped" and (guarded and watch.tool_contact())
         collided = status == "stopped" and not touched
         end = w.tip_pose()[0]
-        message = self._collision_text(fn, watch, end) if collided else ""
+        message = self._collision_text(fn, watch, end) if collided else fn  # the primitive log line names the move
         if status not in ("ok", "stopped"):
             message = f"{fn}: {status}"
+        shown = "collision" if collided else "contact" if touched else status
         ctx.count_primitive({
-            "ok": not collided and status in ("ok", "stopped"), "status": "collision" if collided else status,
+            "ok": not collided and status in ("ok", "stopped"), "status": shown,
             "kind": "move", "fn": fn, "obj_id": w.suction.held, "pick": tuple(float(v) for v in start),
             "place": tuple(float(v) for v in end), "final_pos": None, "steps": w.steps - steps0,
             "sim_s": w.time - t0, "message": message, "contact": touched,
