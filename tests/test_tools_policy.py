@@ -367,13 +367,24 @@ def test_each_turn_is_logged_with_its_calls_and_results(server: StubLLMServer) -
     assert rec.texts["llm/attempt2/planner/1/completion"] == ["FINISH"]
 
 
-def test_image_feedback_sends_the_views_after_the_tool_messages(server: StubLLMServer) -> None:
-    server.respond_with(turns(lambda r: Reply.calls(("get_obj_names", {})), "FINISH"))
-    result = episode(agent(server, interaction="multi", feedback="image"))
-    last = server.requests[1]["messages"][-1]
-    assert last["role"] == "user" and isinstance(last["content"], list)
-    images = [p for p in last["content"] if p.get("type") == "image_url"]
-    assert len(images) == result.llm.attempts[0].images >= 1 and result.llm.feedback == "image"
+@pytest.mark.parametrize("feedback", ["image", "describe"])
+def test_views_or_their_description_follow_the_tool_messages(server: StubLLMServer, feedback: str) -> None:
+    def respond(request: dict[str, Any]) -> Reply:
+        if "The images show a robot's table" in str(request["messages"][-1]["content"]):
+            return Reply.answer("Nothing moved.")
+        return turns(lambda r: Reply.calls(("get_obj_names", {})), "FINISH")(request)
+
+    server.respond_with(respond)
+    result = episode(agent(server, interaction="multi", feedback=feedback))
+    first = result.llm.attempts[0]
+    last = [r for r in server.requests if "tools" in r][1]["messages"][-1]
+    assert last["role"] == "user" and result.llm.feedback == feedback
+    if feedback == "image":
+        images = [p for p in last["content"] if p.get("type") == "image_url"]
+        assert len(images) == first.images >= 1
+    else:
+        assert "What changed in the camera views: Nothing moved." in last["content"]
+        assert first.described == "Nothing moved." and first.llm_calls == 2 and first.images >= 2
 
 
 def test_streamed_call_pieces_are_joined_by_index() -> None:
