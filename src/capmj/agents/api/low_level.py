@@ -10,13 +10,16 @@ joint-space moves, IK, suction.  :class:`LowLevelFunctions` works over the same 
 (:meth:`PlannerAPI.functions` with ``level="low"``), in the same sandbox with the same errors; the
 arm is driven through :class:`~capmj.agents.api.low_level_robot.RobotDriver` (contact watch,
 budgets, records).  The docstrings are the full statement; ``prompts/planner_low.py`` documents
-the same functions for the LLM.
+the same functions for the LLM.  Planned moves (``move_to_pose``, ``move_to_joints``, ``home``)
+go around obstacles; straight moves (``move_linear``, ``move_through``, ``move_until_contact``) go
+exactly where they are told.
 
 Conventions: metres and radians in the world frame of the high level (robot base at the origin,
 table top at z = 0); the suction tool always points straight down, so a tool pose is a position
 [x, y, z] of the suction tip and a yaw about z; object quaternions are (x, y, z, w).  A move the
-arm cannot make raises :class:`~capmj.errors.UnreachablePose` before it moves; a move that
-touches something it was not meant to stops and raises :class:`~capmj.errors.CollisionDetected`.
+arm cannot make raises :class:`~capmj.errors.UnreachablePose` (or, planned, finds no clear path:
+:class:`~capmj.errors.MotionPlanningError`) before it moves; a move that touches something it was
+not meant to stops and raises :class:`~capmj.errors.CollisionDetected`.
 """
 
 from __future__ import annotations
@@ -173,7 +176,8 @@ class LowLevelFunctions:
     def move_to_pose(self, position, yaw=None) -> None:
         """Move the suction tip to ``position`` [x, y, z] with ``yaw`` (None: keep it) on a planned path
         clear of the objects (up above everything on the table, carried object included, across, then
-        straight down).  Raises UnreachablePose (nothing moved) or CollisionDetected (the arm stopped)."""
+        straight down; a leg with something in its way is planned around it).  Raises UnreachablePose or
+        MotionPlanningError (no clear path) before the arm moves, CollisionDetected when it stopped."""
         self._robot.move_planned("move_to_pose", self._position(position), self._yaw(yaw))
 
     def move_through(self, waypoints, yaw=None) -> None:
@@ -204,9 +208,10 @@ class LowLevelFunctions:
                                         self._speed(speed, robot.motion.cfg.approach_speed))
 
     def move_to_joints(self, joints) -> None:
-        """Move in joint space to ``joints`` (6 angles, rad), every joint starting and stopping together.
-        Raises UnreachablePose for a joint beyond its limit or a tool below the table, CollisionDetected
-        for a contact on the way."""
+        """Move in joint space to ``joints`` (6 angles, rad), every joint starting and stopping together
+        (planned around what is in the way when the straight joint path is not clear).  Raises
+        UnreachablePose for a joint beyond its limit or a tool below the table, MotionPlanningError when
+        no clear path exists, CollisionDetected for a contact on the way."""
         if isinstance(joints, np.ndarray):
             joints = joints.tolist()
         if not (isinstance(joints, (list, tuple)) and len(joints) == 6 and all(is_number(v) for v in joints)):
@@ -214,8 +219,8 @@ class LowLevelFunctions:
         self._robot.move_joints("move_to_joints", np.asarray(joints, float))
 
     def home(self) -> None:
-        """Move in joint space to the home joints (arm folded over the rear of its base, out of the
-        cameras' view)."""
+        """Move in joint space (planned, as :meth:`move_to_joints`) to the home joints: the arm folded
+        over the rear of its base, out of the cameras' view."""
         self._robot.home("home")
 
     def suction_on(self) -> bool:
