@@ -13,12 +13,12 @@ from robot_api import get_object_names, get_object, get_objects, get_object_pose
 # Robot (the suction tool always points straight down: a tool pose is the tip position [x, y, z] and a yaw):
 # get_ee_pose() -> ([x, y, z], yaw) of the suction tip. get_joint_positions() -> 6 joint angles. solve_ik(position, yaw=None) -> 6 joint angles.
 # move_to_pose(position, yaw=None): planned move of the tip to the pose (up above everything on the table, across, straight down); yaw None keeps the tool's yaw.
-# move_through(waypoints, yaw=None): straight lines through [x, y, z] or ([x, y, z], yaw) waypoints. move_linear(position, yaw=None, speed=None): one straight line (speed m/s, at most 1.5).
+# move_through(waypoints, yaw=None): straight lines (never planned around anything) through [x, y, z] or ([x, y, z], yaw) waypoints. move_linear(position, yaw=None, speed=None): one straight line (speed m/s, at most 1.5).
 # move_until_contact(position, yaw=None, speed=None) -> True when it stopped because the tool (the cup, or the object it holds) touched something, False when it reached position; position may be up to 0.05 below the table.
-# move_to_joints(joints): joint-space move. home(): the arm folded over its base, out of the cameras' view.
+# move_to_joints(joints): joint-space move, planned around obstacles. home(): the same to the arm folded over its base, out of the cameras' view.
 # suction_on() -> True when it grips: it grips only the movable object the cup touches at that moment. suction_off(): let go. is_holding() -> whether it holds an object.
 # say(message) logs a message.
-# Errors: UnreachablePose (nothing moved: out of reach, or below the table top, z < 0, except for move_until_contact), CollisionDetected (the arm, cup or held object touched something on the way; the arm stops there).
+# Errors: UnreachablePose (nothing moved: out of reach, or below the table top, z < 0, except for move_until_contact), MotionPlanningError (nothing moved: no clear path for move_to_pose, move_to_joints, home), CollisionDetected (the arm, cup or held object touched something on the way; the arm stops there).
 # A pick: move above the object's top, move_until_contact down onto it, suction_on. A place: move above the spot high enough for what hangs below the tip, move_until_contact down, suction_off.
 # The cup grips where it touches: the held object's centre stays where it was relative to the tip, and turning the tool's yaw turns the held object with it.
 # Table: x from 0.25 (top/rear) to 0.75 (bottom/front), y from -0.5 (left) to 0.5 (right), z up, table top z = 0, robot base at (0, 0).
