@@ -317,41 +317,6 @@ def test_tools_take_their_own_options() -> None:
     assert "An example" not in bare and bare.startswith(system_prompt(8).split("\n\n")[0])
 
 
-def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, tmp_path: Path) -> None:
-    """docs/llm.md's tool-calling command, against the scripted server (one task, in this process),
-    then ``replay-check`` of its folder from the cache alone."""
-    from capmj.bench.cli import main
-    from capmj.bench.replay_check import main as replay_check
-
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "llm.md").read_text()
-    section = doc.split("## Tool calling")[1].split("\n## ")[0]
-    argv = section.split("python -m capmj.bench ")[1].split("```")[0].replace("\\\n", " ").split()
-    given = dict(zip(argv[::2], argv[1::2]))
-    assert given["--policy"] == "tools"
-    swap = {"--model": "openai/stub", "--api-base": server.base_url, "--llm-cache": str(tmp_path / "cache"),
-            "--tasks": TASK, "--out": str(tmp_path / "run"), "--workers": "0"}
-    argv = [x for k, v in given.items() for x in (k, swap.get(k, v))]
-
-    def in_text(request: dict[str, Any]) -> Reply:
-        return Reply.answer(json.dumps({"name": "get_obj_names", "arguments": {}}))
-
-    server.respond_with(turns(in_text, "FINISH"))
-    assert main(argv) == 0
-    episodes = [json.loads(line) for line in (tmp_path / "run" / "episodes.jsonl").read_text().splitlines()]
-    assert len(episodes) == 2 and all(e["llm"]["policy"] == "tools" for e in episodes)
-    config = json.loads((tmp_path / "run" / "config.json").read_text())
-    assert config["args"]["agent_options"]["policy"] == "tools"
-    assert config["manifest"]["policy"] == {"mode": "tools", "max_turns": int(given.get("--max-turns", 8))}
-    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
-    tools = summary["overall"]["llm openai/stub"]["loop"]["tools"]
-    assert tools == {"episodes": 2, "mean_turns": 2.0, "calls": 2, "content_json_calls": 2,
-                     "content_json_share": 1.0, "ended_by_model": 2, "finish_agree": 0, "no_finish": 0}
-    server.reset()
-    server.respond_with(lambda request: Reply.error(500, "must not be called"))
-    assert replay_check([str(tmp_path / "run")]) == 0
-    assert len(server.requests) == 0
-
-
 def test_each_turn_is_logged_with_its_calls_and_results(server: StubLLMServer) -> None:
     from test_llm_chain import MemoryRecorder
 
@@ -404,3 +369,38 @@ def test_streamed_call_pieces_are_joined_by_index() -> None:
         parts.add(c)
     assert [(t.id, t.name, json.loads(t.arguments)) for t in parts.calls()] == [
         ("a", "say", {"msg": "hi"}), ("b", "get_color", {"obj": 3})]
+
+
+def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, tmp_path: Path) -> None:
+    """docs/llm.md's tool-calling command, against the scripted server (one task, in this process),
+    then ``replay-check`` of its folder from the cache alone."""
+    from capmj.bench.cli import main
+    from capmj.bench.replay_check import main as replay_check
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "llm.md").read_text()
+    section = doc.split("## Tool calling")[1].split("\n## ")[0]
+    argv = section.split("python -m capmj.bench ")[1].split("```")[0].replace("\\\n", " ").split()
+    given = dict(zip(argv[::2], argv[1::2]))
+    assert given["--policy"] == "tools"
+    swap = {"--model": "openai/stub", "--api-base": server.base_url, "--llm-cache": str(tmp_path / "cache"),
+            "--tasks": TASK, "--out": str(tmp_path / "run"), "--workers": "0"}
+    argv = [x for k, v in given.items() for x in (k, swap.get(k, v))]
+
+    def in_text(request: dict[str, Any]) -> Reply:
+        return Reply.answer(json.dumps({"name": "get_obj_names", "arguments": {}}))
+
+    server.respond_with(turns(in_text, "FINISH"))
+    assert main(argv) == 0
+    episodes = [json.loads(line) for line in (tmp_path / "run" / "episodes.jsonl").read_text().splitlines()]
+    assert len(episodes) == 2 and all(e["llm"]["policy"] == "tools" for e in episodes)
+    config = json.loads((tmp_path / "run" / "config.json").read_text())
+    assert config["args"]["agent_options"]["policy"] == "tools"
+    assert config["manifest"]["policy"] == {"mode": "tools", "max_turns": int(given.get("--max-turns", 8))}
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    tools = summary["overall"]["llm openai/stub"]["loop"]["tools"]
+    assert tools == {"episodes": 2, "mean_turns": 2.0, "calls": 2, "content_json_calls": 2,
+                     "content_json_share": 1.0, "ended_by_model": 2, "finish_agree": 0, "no_finish": 0}
+    server.reset()
+    server.respond_with(lambda request: Reply.error(500, "must not be called"))
+    assert replay_check([str(tmp_path / "run")]) == 0
+    assert len(server.requests) == 0
