@@ -279,10 +279,11 @@ def test_the_tools_prompt_example_runs_and_shows_the_real_results(example) -> No
 
 def test_content_calls_read_only_offered_functions_in_order() -> None:
     text = ('Sure. {"name": "get_color", "arguments": {"obj": 3}} and ```json\n{"name": "say", "parameters": '
-            '{"msg": "hi"}}\n``` {"name": "rm_rf", "arguments": {}} {"not": "a call"} {broken')
+            '{"msg": "hi"}}\n``` {"name": "rm_rf", "arguments": {}} {"not": "a call"} {broken '
+            '[{"type": "function", "function": {"name": "get_obj_names", "arguments": "{}"}}]')
     calls = content_calls(text, TOOL_FUNCTIONS, 2)
     assert [(c.id, c.name, json.loads(c.arguments)) for c in calls] == [
-        ("json_2_1", "get_color", {"obj": 3}), ("json_2_2", "say", {"msg": "hi"})]
+        ("json_2_1", "get_color", {"obj": 3}), ("json_2_2", "say", {"msg": "hi"}), ("json_2_3", "get_obj_names", {})]
 
 
 def example_context(example):  # noqa: ANN001, ANN201 - a prompt Example -> its EpisodeContext

@@ -57,7 +57,8 @@ def says_finish(text: str) -> bool:
 
 def content_calls(text: str, names: Collection[str], turn: int) -> list[Call]:
     """The calls written as JSON objects in ``text`` (``{"name": one of names, "arguments": {...}}``,
-    ``"parameters"`` also read; arguments given as a JSON text kept as that text), in order."""
+    ``"parameters"`` also read, also inside ``{"function": {...}}``; arguments given as a JSON text
+    kept as that text), in order."""
     decoder = json.JSONDecoder()
     calls: list[Call] = []
     i = text.find("{")
@@ -67,6 +68,8 @@ def content_calls(text: str, names: Collection[str], turn: int) -> list[Call]:
         except json.JSONDecodeError:
             i = text.find("{", i + 1)
             continue
+        if isinstance(value, dict) and isinstance(value.get("function"), dict) and "name" not in value:
+            value = value["function"]  # the OpenAI form of a call: {"type": "function", "function": {...}}
         if isinstance(value, dict) and value.get("name") in names:
             args = value.get("arguments", value.get("parameters", {}))
             arguments = args if isinstance(args, str) else json.dumps(args)
