@@ -191,3 +191,10 @@ def test_a_run_without_thumbnails_profile_or_anomalies_still_gets_a_page(runs: t
     assert 'data-source="tasks"' in html
     assert "no thumbnail" in html and "no anomaly accounting" in html
     assert html.count('class="failed-episode agent"') == 1
+
+
+def test_without_chromium_the_browser_tests_say_how_to_get_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    import conftest
+
+    monkeypatch.setattr(conftest.shutil, "which", lambda name: None)
+    assert "apt install chromium chromium-driver" in str(conftest.browser_problem())

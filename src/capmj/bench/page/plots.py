@@ -42,7 +42,8 @@ def _svg(fig: Any, plt: Any) -> bytes:
 
 
 def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
-    """Tasks as rows (and the overall row), configurations as columns; an empty cell is grey."""
+    """Tasks as rows (and the overall row), configurations as columns; a cell without an agent episode
+    is grey (and says how many anomalies it had)."""
     plt = _pyplot()
     import matplotlib
     import numpy as np
@@ -57,6 +58,9 @@ def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
             if st.get("n"):
                 rates[i, j] = 100 * st["success_rate"]
                 ax.text(j, i, f"{st['successes']}/{st['n']}", ha="center", va="center", fontsize=8)
+            elif st.get("anomalies"):  # every episode of the cell was a harness failure
+                ax.text(j, i, f"{st['anomalies']} anomal{'ies' if st['anomalies'] != 1 else 'y'}", ha="center",
+                        va="center", fontsize=7, color="#555")
     cmap = matplotlib.colormaps["RdYlGn"].with_extremes(bad="#dddddd")
     image = ax.imshow(np.ma.masked_invalid(rates), cmap=cmap, vmin=0, vmax=100, aspect="auto", zorder=0)
     ax.set_xticks(range(len(labels)))
