@@ -45,6 +45,7 @@ examples:
   python -m capmj.bench replay-check runs/llm             # re-run from the LLM cache alone, compare
   python -m capmj.bench judge --reporter text --model M --out runs/judge   # score a reporter on labelled states
   python -m capmj.bench export runs/llm --format chat-jsonl --out calls.jsonl   (see docs/export.md)
+  python -m capmj.bench export runs/llm --bundle llm-evidence.zip   # the run's evidence in one zip (docs/bench.md)
 
 results: DIR/episodes.jsonl (one line per episode), DIR/summary.{json,md,png}, DIR/config.json,
          DIR/rrd/<task>/<seed>-<agent>.rrd (open with: python -m capmj.replay FILE --open)
@@ -66,7 +67,8 @@ COMMANDS: dict[str, Command] = {
     "replay-check": Command("capmj.bench.replay_check:main",
                             "re-run a finished run from the LLM cache alone and compare (docs/failures.md)"),
     "judge": Command("capmj.judge.cli:main", "score a completion reporter on labelled final states (docs/judge.md)"),
-    "export": Command("capmj.bench.export:main", "a run's LLM calls as fine-tuning data (docs/export.md)"),
+    "export": Command("capmj.bench.export:main", "a run's LLM calls as fine-tuning data (docs/export.md), or its "
+                                                 "evidence bundle (--bundle OUT.zip, docs/bench.md)"),
 }
 """``python -m capmj.bench COMMAND ...``; each parses its own arguments (``COMMAND --help``)."""
 
