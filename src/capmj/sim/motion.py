@@ -208,15 +208,17 @@ class Motion:
         return float(np.arctan2(rot[1, 0], rot[0, 0]))
 
     def move_to(self, pos: np.ndarray, yaw: float, speed: float | None = None,
-                stop: Callable[[], bool] | None = None, slow_last: float = 0.0) -> tuple[str, int]:
+                stop: Callable[[], bool] | None = None, slow_last: float = 0.0,
+                guarded: bool = False) -> tuple[str, int]:
         """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps).
         The last ``slow_last`` metres run at ``approach_speed`` without stopping first (a guarded
-        descent: fast through free space, slow where contact is expected)."""
-        return self.move_through([(pos, yaw)], speed, stop, slow_last)[:2]
+        descent: fast through free space, slow where contact is expected; ``guarded``: see
+        :meth:`move_through`)."""
+        return self.move_through([(pos, yaw)], speed, stop, slow_last, guarded=guarded)[:2]
 
     def move_through(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None,
                      stop: Callable[[], bool] | None = None, slow_last: float = 0.0,
-                     contact_before: float = 0.0) -> tuple[str, int, int]:
+                     contact_before: float = 0.0, guarded: bool = False) -> tuple[str, int, int]:
         """Move the tip along straight lines through each ``(pos, yaw)`` in turn, rounding each
         corner within ``blend`` (the next line starts while the last one brakes, as a UR
         controller's blend radius does) instead of stopping there.  ``stop`` and ``slow_last``
@@ -226,9 +228,10 @@ class Motion:
         With ``plan_collisions`` every line is checked for collisions first (:meth:`clear_legs`):
         one that is not clear is replaced by a joint-space path around the obstacle, and
         :class:`~capmj.errors.MotionPlanningError` is raised, before anything moves, when there is
-        none.  A guarded last line (``stop`` given) may end touching what is under its end;
-        ``contact_before`` is how far before its end the contact is expected (a descent's
-        overshoot), the part beyond which is not checked for the arm's links.
+        none.  A ``guarded`` last line (a descent that ``stop`` ends at its contact) may end
+        touching what is under its end; ``contact_before`` is how far before its end the contact
+        is expected (a descent's overshoot), the part beyond which is not checked for the arm's
+        links.  ``stop`` alone (a watch for any contact) changes no check.
 
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
@@ -236,7 +239,7 @@ class Motion:
         plans = self.plan_lines(points, speed, slow_last)
         if isinstance(plans, int):
             return "unreachable", 0, plans
-        plans = self.clear_legs(plans, guarded=stop is not None, contact_before=contact_before)
+        plans = self.clear_legs(plans, guarded=guarded, contact_before=contact_before)
         status, steps = self.run_legs(plans, np.asarray(points[-1][0], float), stop)
         return status, steps, -1
 
@@ -322,7 +325,7 @@ class Motion:
                 or np.any(q_goal < self.ik.lo) or np.any(q_goal > self.ik.hi):
             return "unreachable", 0
         plan = self.joint_plan(np.array([self.world.arm_ctrl(), q_goal]))
-        plan = self.clear_legs([plan], guarded=stop is not None)[0]
+        plan = self.clear_legs([plan])[0]
         stopped, steps = self.execute(plan, stop)
         if stopped:
             return "stopped", steps
@@ -338,7 +341,7 @@ class Motion:
         "unreachable" (no IK solution) moves nothing.  Raises
         :class:`~capmj.errors.MotionPlanningError` before moving when no clear path exists."""
         pos = np.asarray(pos, float)
-        status, steps, _ = self.move_through([(pos, yaw)], speed, stop)
+        status, steps, _ = self.move_through([(pos, yaw)], speed, stop)  # not guarded: nothing may touch
         if status != "unreachable":
             return status, steps
         res = self.ik.solve(pos, yaw, self.world.arm_ctrl())

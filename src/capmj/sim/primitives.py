@@ -142,7 +142,7 @@ class Primitives:
         placed = w.suction.held_touches_other
         tip = w.tip_pose()[0]
         m.move_to(np.array([pick[0], pick[1], tip[2]]), yaw, stop=placed)
-        m.move_to(np.array([pick[0], pick[1], 0.0]), yaw, speed=cfg.approach_speed, stop=placed)
+        m.move_to(np.array([pick[0], pick[1], 0.0]), yaw, speed=cfg.approach_speed, stop=placed, guarded=True)
         w.suction.release()
         w.step(cfg.release_dwell_steps)
         tip = w.tip_pose()[0]
@@ -300,7 +300,7 @@ class Primitives:
                                                           (down, new_yaw)]
                 lifts = len(via)
                 status, _, leg = m.move_through(legs, stop=placed, slow_last=cfg.approach_gap + cfg.overshoot,
-                                                contact_before=cfg.overshoot)
+                                                contact_before=cfg.overshoot, guarded=True)
         if status == "unreachable" and leg == len(legs) - 1:  # no descent: carry over the place point, let go there
             status, _, leg = m.move_through(legs[:-1])
         if status == "unreachable":
@@ -324,7 +324,7 @@ class Primitives:
         first: MotionPlanningError | tuple[str, int, int]
         depth = self.cfg.overshoot  # the descent's expected contact lies this far before its end
         try:
-            first = m.move_through(legs, stop=stop, slow_last=slow_last, contact_before=depth)
+            first = m.move_through(legs, stop=stop, slow_last=slow_last, contact_before=depth, guarded=True)
             if first[0] != "unreachable" or first[2] < len(legs) - 2:
                 return first
         except MotionPlanningError as exc:
