@@ -98,3 +98,13 @@ def test_the_bundle_rebuilds_its_summary_from_its_own_files(bundle: tuple[Path, 
 def test_a_folder_that_is_no_run_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["export", str(tmp_path), "--bundle", str(tmp_path / "x.zip")]) == 2
     assert "is not a result folder" in capsys.readouterr().err and not (tmp_path / "x.zip").exists()
+
+
+def test_with_rrd_the_logs_come_too(bundle: tuple[Path, Path], tmp_path: Path) -> None:
+    from capmj.bench.bundle import write_bundle
+
+    run, _ = bundle
+    with zipfile.ZipFile(write_bundle(run, tmp_path / "with-logs.zip", with_rrd=True)) as z:
+        logs = sorted(n for n in z.namelist() if n.endswith(".rrd"))
+        assert logs == sorted(p.relative_to(run).as_posix() for p in (run / "rrd").rglob("*.rrd")) and len(logs) == 4
+        assert z.read(logs[0]) == (run / logs[0]).read_bytes()
