@@ -198,3 +198,21 @@ def test_without_chromium_the_browser_tests_say_how_to_get_it(monkeypatch: pytes
 
     monkeypatch.setattr(conftest.shutil, "which", lambda name: None)
     assert "apt install chromium chromium-driver" in str(conftest.browser_problem())
+
+
+def test_a_card_shows_each_turn_and_escapes_what_the_model_wrote() -> None:
+    """LLM-written text (plans, feedback, errors) is data on the page, never markup."""
+    from capmj.bench.page.gallery import Attempt, FailedEpisode
+    from capmj.bench.page.html import _card
+
+    hostile = "print('</pre><script>alert(1)</script>')"
+    ep = FailedEpisode(config="M1", task=TASK, seed=10001, failure="no_finish", error=None, goal="<b>goal</b>",
+                       progress=0.0, diagnostics=("<img src=x onerror=alert(1)>",),
+                       attempts=(Attempt(1, hostile, feedback="ran: <ok>", finish=False),
+                                 Attempt(2, "x = 1", error="NameError: <y>", finish=False)),
+                       turns=True, thumbnail=None, rrd=None, transcript=None)
+    html = _card(ep, anomaly=False)
+    assert "Turn 1: plan (1 lines) · no FINISH" in html and "Turn 2: plan" in html
+    assert "&lt;/pre&gt;&lt;script&gt;alert(1)&lt;/script&gt;" in html and "ran: &lt;ok&gt;" in html
+    assert "<script" not in html and "<img src=x" not in html and "<b>goal" not in html
+    assert "no thumbnail" in html and "No .rrd log" in html
