@@ -167,6 +167,13 @@ def test_a_model_that_never_stops_calling_ends_at_max_turns_labelled(server: Stu
     assert classify(as_record(result)) == "no_finish"
 
 
+def test_the_episodes_llm_budget_ends_the_turns(server: StubLLMServer) -> None:
+    server.respond_with(lambda request: Reply.calls(("get_obj_names", {})))
+    result = episode(agent(server, episode_max_tokens=2000))
+    assert result.llm.stopped == "llm budget" and result.llm.attempts[-1].rule == "llm_budget"
+    assert as_record(result).failure == "budget" and 1 < len(result.llm.attempts) < 8
+
+
 def test_multi_sends_the_feedback_after_the_tool_messages(server: StubLLMServer) -> None:
     server.respond_with(turns(lambda r: Reply.calls(("get_obj_names", {})), "FINISH"))
     result = episode(agent(server, interaction="multi"))

@@ -51,7 +51,8 @@ from capmj.agents.llm_agent.tools_calls import Call, answer_calls, run_call, say
 from capmj.agents.lmp.meter import LLMMeter
 from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
 from capmj.agents.prompt_files import load_prompt
-from capmj.errors import BudgetExceeded, LLMError, ToolCallingUnsupported, ToolsRejected, describe, error_facts
+from capmj.errors import (BudgetExceeded, LLMBudgetExceeded, LLMError, ToolCallingUnsupported, ToolsRejected, describe,
+                          error_facts)
 from capmj.llm import LLMClient, ToolCall, image_part, text_part
 from capmj.llm.provider import import_litellm, short
 from capmj.llm.records import Completion
@@ -110,7 +111,7 @@ def conversation_text(messages: Sequence[dict[str, Any]]) -> str:
 class _Turn:
     """What one turn did: the answer (None: the request failed), its calls and what they returned."""
 
-    error: LLMError | None
+    error: LLMError | LLMBudgetExceeded | None
     """Why the request failed (a provider failure, the LLM budget)."""
     text: str
     calls: tuple[ToolCallRecord, ...]
@@ -127,6 +128,9 @@ def _ask(session: LMPSession, call: LMPCall, messages: list[dict[str, Any]], too
     session.record(call, "prompt", conversation_text(messages))
     try:
         completion: Completion = session.complete(messages, purpose=f"{call.lmp}#{call.n}", tools=tools)
+    except LLMBudgetExceeded as exc:  # the episode's LLM budget: the answer came, over the limit
+        session.record(call, "error", describe(exc))
+        raise
     except LLMError as exc:
         cause = exc.__cause__
         if cause is not None and getattr(cause, "status_code", None) == 400 and "tool" in str(cause).lower():
@@ -155,10 +159,12 @@ def _turn(session: LMPSession, api: PlannerAPI, messages: list[dict[str, Any]], 
     try:
         completion = _ask(session, call, messages, tools, model)
     except Exception as exc:
+        if isinstance(exc, LLMBudgetExceeded):  # the episode's LLM budget ends the turn
+            return _Turn(exc, "", (), False, 0, (), None)
         found = find_llm_error(exc)
         if found is None:
             raise
-        return _Turn(found, "", (), False, 0, (), None)  # a provider failure (or the budget) ends the turn
+        return _Turn(found, "", (), False, 0, (), None)  # a provider failure ends the turn
     calls: list[Call] = answer_calls(completion.text, completion.tool_calls, TOOL_FUNCTIONS, k)
     finish = says_finish(completion.text)
     records: list[ToolCallRecord] = []
@@ -252,7 +258,7 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
             native = [ToolCall(c.id, c.name, c.arguments).to_message() for c in ran.calls if c.form == "tool_calls"]
             if native and len(meter.calls) > made:  # the call log (transcripts, export) keeps the answer's calls
                 meter.calls[made]["tool_calls"] = native
-            llm_error = ran.error
+            llm_error = ran.error if isinstance(ran.error, LLMError) else None
             predicate: tuple[bool | None, float | None] = (None, None)
             if llm_error is None:
                 try:
@@ -289,7 +295,7 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
                     feedback = _feedback(template, k, max_turns - k, scene, described)
                     messages.append({"role": "user", "content": [text_part(feedback)] + parts if parts else feedback})
                     ctx.recorder.text(f"llm/attempt{k}/feedback", feedback)
-            error = llm_error if llm_error is not None else ran.last_error
+            error = llm_error if llm_error is not None else ran.error if ran.error is not None else ran.last_error
             new = [r for c, n in zip(clients, before) for r in c.records[n:]]
             error_text = describe(error) if error is not None else None
             error_type, error_status = error_facts(error) if error is not None else (None, None)
