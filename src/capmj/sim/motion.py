@@ -12,20 +12,27 @@ Why this shape:
   the velocity term cancels that lag, the inertia term (the arm's mass-matrix block) the
   acceleration's, and ``b`` the load the arm's gravity compensation does not cover (the cup, a
   carried object; Coriolis at the segment start), which would otherwise make the tip sag.
+- Every move is checked for collisions before it runs (:meth:`Motion.clear_legs`, on MuJoCo's own
+  collision detection, :mod:`capmj.sim.collision`): a leg that is not clear is replaced by a
+  joint-space path around the obstacle (:mod:`capmj.sim.planner`), and a move with no clear path
+  raises :class:`~capmj.errors.MotionPlanningError` before anything moves (``plan_collisions`` off:
+  the straight legs alone, unchecked).
 - Every budget is in simulation steps, never wall-clock, so results do not depend on the machine.
-- Failures are returned as :class:`PrimitiveResult` values, never raised.
+- An unreachable line is a status, never raised; the pick-and-place primitive returns every failure,
+  a missing path included, as a :class:`PrimitiveResult`.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import Callable, Literal, Sequence
 
 import numpy as np
 
 from capmj.errors import MotionPlanningError
-from capmj.sim.collision import CHECK_STEP, Allowance, CollisionChecker
-from capmj.sim.ik import SuctionIK, arm_inertia_block
+from capmj.sim.collision import CHECK_STEP, TABLE, Allowance, CollisionChecker
+from capmj.sim.ik import SuctionIK, arm_inertia_block, tool_rotation
 from capmj.sim.line_plan import SegmentPlan, plan_line
 from capmj.sim.motion_config import MotionConfig
 from capmj.sim.planner import plan_joint_path, query_seed
@@ -297,8 +304,6 @@ class Motion:
         """Every IK branch (shoulder, elbow, wrist) reaching ``pos`` pointing down with ``yaw``
         within the joint limits, refined on the model, nearest the commanded joints first: other
         arm postures for the same tool pose, whose links stand elsewhere."""
-        from capmj.sim.ik import tool_rotation
-
         q_now = self.world.arm_ctrl()
         target = np.eye(4)
         target[:3, :3] = tool_rotation(yaw)
@@ -374,16 +379,15 @@ class Motion:
         What may touch: the pairs touching where the move starts (first leg only), and for a
         ``guarded`` move (one that stops at contact) on its last leg the cup and the carried
         object may touch what they touch where that leg ends (the object being picked, the
-        surface being placed on) and the table, and pass anything else closer than the clearance
-        (a placement next to its neighbours) without pressing into it; that last leg is never replaced (its end is the
-        contact the move is for), and it is checked only up to ``contact_before`` metres of path
-        before its end, where the contact is expected (a guarded move stops there; the rest is the
-        margin it may go on by when the surface is lower).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg
-        is not clear and cannot be replaced.  Records each leg in :attr:`paths`.  With
-        ``plan_collisions`` off the legs are returned unchecked (and recorded).
+        surface being placed on) and the table, and pass anything else closer than the
+        clearance (a placement next to its neighbours) without pressing into it.  That last leg
+        is never replaced (its end is the contact the move is for), and it is checked only up to
+        ``contact_before`` metres of path before its end, where the contact is expected (a
+        guarded move stops there; the rest is the margin it may go on by when the surface is
+        lower).  Raises :class:`~capmj.errors.MotionPlanningError` when a leg is not clear and
+        cannot be replaced.  Records each leg in :attr:`paths`.  With ``plan_collisions`` off
+        the legs are returned unchecked (and recorded).
         """
-        import time
-
         if not self.cfg.plan_collisions:
             for plan in plans:
                 self._record(plan, planned=False)
@@ -395,8 +399,6 @@ class Motion:
             self.planning_s += time.perf_counter() - t0
 
     def _clear_legs(self, plans: list[SegmentPlan], guarded: bool, contact_before: float) -> list[SegmentPlan]:
-        from capmj.sim.collision import TABLE
-
         chk = self.checker
         chk.sync()
         start = Allowance(pairs=chk.touching(plans[0].qs[0]))
