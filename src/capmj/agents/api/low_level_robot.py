@@ -35,7 +35,7 @@ from capmj.errors import CollisionDetected, UnreachablePose
 from capmj.sim.contact_watch import CUP, LINK, TABLE, ContactWatch
 from capmj.sim.line_plan import SegmentPlan
 from capmj.sim.motion import Motion
-from capmj.sim.pose import mat_to_quat, mat_yaw, xyzw
+from capmj.sim.pose import mat_yaw
 from capmj.sim.robot import HOME_QPOS
 from capmj.sim.world import World
 
@@ -49,6 +49,7 @@ TABLE_Z = 0.0
 
 CONTACT_DEPTH = 0.05
 """m below the table top a guarded move may aim at (it stops where the tool meets something)."""
+
 
 class _Perceiving(Protocol):
     """The part of :class:`~capmj.agents.api.perceived.PerceivedScene` the driver uses."""
@@ -85,10 +86,6 @@ class RobotDriver:
         """The suction tip's position and yaw (where it is, not where it is commanded)."""
         pos, rot = self.world.tip_pose()
         return pos, mat_yaw(rot)
-
-    def tool_quat(self) -> list[float]:
-        """The suction tip's orientation quaternion (x, y, z, w)."""
-        return [float(v) for v in xyzw(mat_to_quat(self.world.tip_pose()[1]))]
 
     def joints(self) -> np.ndarray:
         return self.world.arm_q()
