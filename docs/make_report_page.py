@@ -80,7 +80,7 @@ def _save(png: bytes, target: Path, width: int, crop: tuple[int, int] | None = N
         img = img.crop((0, crop[0], img.width, min(crop[1], img.height)))
     img = img.resize((width, round(img.height * width / img.width)), Image.LANCZOS)
     target.parent.mkdir(parents=True, exist_ok=True)
-    img.quantize(colors=192, method=Image.Quantize.MEDIANCUT).save(target, optimize=True)
+    img.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(target, optimize=True)  # keeps small areas' colours
     print(f"wrote {target} ({target.stat().st_size // 1024} KB)")
 
 
