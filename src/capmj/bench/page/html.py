@@ -173,7 +173,7 @@ def _efficiency(view: ProfileView) -> str:
             "<tr>" + "".join(f"<th>{_e(h)}</th>" for _, h in METRICS) * 2 + "</tr>")
     rows = ""
     for lab in view.configs:
-        eff = view.efficiency[lab]
+        eff = view.efficiency.get(lab) or {}
         cells = ""
         for per in ("per_episode", "per_solved"):
             for k, _ in METRICS:
