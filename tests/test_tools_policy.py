@@ -360,6 +360,16 @@ def test_views_or_their_description_follow_the_tool_messages(server: StubLLMServ
         assert first.described == "Nothing moved." and first.llm_calls == 2 and first.images >= 2
 
 
+def test_the_offered_tools_are_part_of_the_cache_key_only_when_sent() -> None:
+    from capmj.llm import cache_key
+
+    request = {"model": "m", "api_base": None, "messages": [{"role": "user", "content": "x"}], "temperature": 0.0,
+               "max_tokens": 10}
+    assert cache_key(**request) == cache_key(**request, tools=None) == cache_key(**request, tools=[])
+    assert cache_key(**request, tools=tool_schemas()) != cache_key(**request)
+    assert cache_key(**request, tools=tool_schemas()[:1]) != cache_key(**request, tools=tool_schemas())
+
+
 def test_streamed_call_pieces_are_joined_by_index() -> None:
     from types import SimpleNamespace
 
