@@ -169,9 +169,6 @@ class LLMAgentOptions:
                 raise ConfigError(f"{', '.join(given)} need(s) --interaction multi")
             if not tools:
                 return
-        if tools and self.api != "high":
-            raise ConfigError(f"--policy tools offers the high-level API's functions as tools; --api {self.api} "
-                              "runs with --policy code")
         if self.reporter != "none" or self.attempts != 1:
             form = "--policy tools" if tools else "--interaction multi"
             raise ConfigError(f"{form} takes no --reporter and no --attempts: the model's FINISH ends "
