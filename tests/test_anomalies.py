@@ -45,6 +45,13 @@ def test_every_failure_label_is_on_one_side_and_only_harness_failures_are_anomal
     ({"llm": LLMNotes("m", attempts=(AttemptRecord(attempt=1, error="LLMError: RateLimitError after 4 attempts",
                                               error_kind="llm"),))}, "llm_error", True),
     ({"error": "PlanError: line 2: NameError", "error_type": "NameError"}, "plan_exception", False),
+    # the LLM agent re-raises its last attempt's error; anything else escaped its loop: a crash inside capmj
+    ({"error": "PlanError: line 2: NameError: name 'x' is not defined", "error_type": "NameError",
+      "llm": LLMNotes("m", attempts=(AttemptRecord(attempt=1, error="PlanError: line 2: NameError: name 'x' is not "
+                                                   "defined", error_kind="plan", error_type="NameError"),))},
+     "plan_exception", False),
+    ({"error": "KeyError: 'verdict'", "error_type": "KeyError",
+      "llm": LLMNotes("m", attempts=(AttemptRecord(attempt=1),))}, "infrastructure", True),
     ({"error": "RuntimeError: unreachable", "error_type": "MotionFailed"}, "motion", False),
     ({}, "wrong_plan", False),
     ({"success": True}, None, False),

@@ -5,7 +5,8 @@
 documented with examples in ``docs/failures.md``; in short:
 
 1. ``infrastructure`` — the episode never ran its agent or could not be judged (worker crash,
-   scene generation or evaluation failed).
+   scene generation or evaluation failed); also, tried after rule 3, an LLM episode whose error is
+   not a capmj error class and not its last attempt's error: the agent's loop crashed, not the plan.
 2. ``budget`` — the episode's LLM token/cost budget stopped it (``llm.stopped == "llm budget"``);
    ``no_finish`` — a multi-turn episode used its ``--max-turns`` without the model saying FINISH
    (``llm.stopped == "turns used up"``), whatever its last turn did.
@@ -45,6 +46,7 @@ from typing import Iterable
 
 from capmj.errors import (
     BudgetExceeded,
+    CapmjError,
     CollisionDetected,
     InfrastructureError,
     LLMError,
@@ -128,6 +130,9 @@ def classify(rec: Episode) -> str | None:
     same = last.identical_to if last is not None and last.not_run else None
     if same is not None and 1 <= same < len(attempts):
         last = attempts[same - 1]  # a plan not re-run ends the episode as that attempt's plan did
+    if error and llm is not None and rec.error_type and not _is(rec.error_type, CapmjError) and \
+            (last is None or last.error != error):
+        return "infrastructure"  # the LLM agent's loop raised what no plan raised: a crash inside capmj
     if last is not None and last.error_kind == "llm" or (error and _is(rec.error_type, LLMError)):
         return "llm_error"
     if last is not None and last.error:
