@@ -181,6 +181,15 @@ def test_a_multi_configuration_run_resumes_what_is_missing(two_configs: Path, tm
     assert "2 configuration(s) (S1, seen) × 1 task(s) × 2 seed(s) = 4 episode(s)" in capsys.readouterr().err
     keys = sorted((r["config"], r["seed"]) for r in _lines(run))
     assert keys == sorted((c, s) for c in ("S1", "seen") for s in (10001, 10003))  # each exactly once
+    # a resume naming one more configuration runs only its episodes, and config.json says so
+    assert main(["--out", str(run), "--resume", "--no-progress", "--configs", "S1,seen,S3", "--configs-file",
+                 str(two_configs.parent / "mine.toml")]) == 0
+    assert "4 already done, 2 to run" in capsys.readouterr().err
+    assert sorted((r["config"], r["seed"]) for r in _lines(run)) == sorted(
+        (c, s) for c in ("S1", "seen", "S3") for s in (10001, 10003))
+    change = json.loads((run / "config.json").read_text())["resumes"][-1]["changed"]["configs"]
+    assert [c["name"] for c in change["to"]] == ["S1", "seen", "S3"]
+    assert json.loads((run / "summary.json").read_text())["profile"]["configs"] == ["S1", "seen", "S3"]
 
 
 def test_report_refuses_runs_whose_task_stamps_differ(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
