@@ -11,6 +11,7 @@ failed episodes in its gallery, each with its worker-made thumbnail and the comm
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -191,6 +192,12 @@ def test_a_run_without_thumbnails_profile_or_anomalies_still_gets_a_page(runs: t
     assert 'data-source="tasks"' in html
     assert "no thumbnail" in html and "no anomaly accounting" in html
     assert html.count('class="failed-episode agent"') == 1
+    # the efficiency of an older summary comes from its cells: totals over the episodes solved
+    (cell,) = summary["overall"].values()
+    found = re.search(r'data-metric="tokens" data-per="per_solved" data-value="([^"]*)"', html)
+    assert found and float(found.group(1)) == cell["llm_usage"]["tokens"] / cell["successes"]
+    found = re.search(r'data-metric="wall_s" data-per="per_episode" data-value="([^"]*)"', html)
+    assert found and float(found.group(1)) == cell["wall_s_total"] / cell["n"]
 
 
 def test_without_chromium_the_browser_tests_say_how_to_get_it(monkeypatch: pytest.MonkeyPatch) -> None:
