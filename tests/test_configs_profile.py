@@ -47,6 +47,21 @@ def test_a_tier_is_refused_exactly_while_the_flag_table_lacks_its_option() -> No
     assert resolve("S1")[0].options == {}
 
 
+def test_every_available_tier_builds_the_llm_agent_with_its_options() -> None:
+    from capmj.agents.factory import agent_setting, make_agent
+
+    shared = {"model": "openai/stub", "api_base": "http://127.0.0.1:9/v1"}
+    for tier in TIERS:
+        try:
+            (config,) = resolve(tier.name)
+        except ConfigError:
+            continue  # its option has not landed yet (the test above)
+        configs = BenchConfig.resolve(Given(agent="llm", agent_options=shared, configs=(config,))).configs
+        agent = make_agent("llm", **configs[0].options)
+        for key, value in tier.options.items():
+            assert agent_setting(agent, key, value) == value, (tier.name, key)
+
+
 def test_a_user_file_adds_configurations_extending_tiers(tmp_path: Path) -> None:
     path = tmp_path / "mine.toml"
     path.write_text('[configs.rgbd-loop]\nabout = "perceived, with a reporter"\nextends = "S2"\nreporter = "text"\n'
