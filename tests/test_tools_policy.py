@@ -190,6 +190,9 @@ def test_a_model_without_tool_calling_fails_at_start_up_naming_it(server: StubLL
     with pytest.raises(ToolCallingUnsupported, match="gpt-3.5-turbo-instruct"):
         LLMAgent(LLMConfig("gpt-3.5-turbo-instruct"), LLMAgentOptions(policy="tools"))
     LLMAgent(LLMConfig("gpt-3.5-turbo-instruct"))  # the code policy takes it
+    with pytest.raises(ToolCallingUnsupported, match="'deepseek-reasoner' has none .*no tool calling"):
+        LLMAgent(LLMConfig("deepseek-reasoner"), LLMAgentOptions(policy="tools"))
+    LLMAgent(LLMConfig("ollama/qwen2.5-coder"), LLMAgentOptions(policy="tools"))  # listed, tool calling not stated
     # the bench stops before any episode or request
     assert main(["--agent", "llm", "--model", "gpt-3.5-turbo-instruct", "--policy", "tools", "--tasks", TASK,
                  "--seeds", str(SEED), "--out", str(tmp_path / "run"), "--workers", "0", "--no-probe"]) == 2

@@ -69,18 +69,21 @@ __all__ = ["check_tool_calling", "conversation_text", "run_tool_turns", "system_
 @functools.lru_cache(maxsize=32)
 def check_tool_calling(model: str) -> None:
     """Raise :class:`~capmj.errors.ToolCallingUnsupported` naming ``model`` when litellm's model list
-    knows it and says it has no tool calling.  A model the list does not know (a self-hosted server's
-    alias) is asked; a server that refuses the tools fails the request with
-    :class:`~capmj.errors.ToolsRejected`."""
+    says it has no tool calling: ``supports_function_calling`` false, or not a chat model (a
+    completion or embedding model).  A chat model the list does not say it of, or does not know
+    (a self-hosted server's alias), is asked; a server that refuses the tools fails the request
+    with :class:`~capmj.errors.ToolsRejected`."""
     litellm = import_litellm()
     try:
         info = litellm.get_model_info(model)
     except Exception:  # noqa: BLE001 - litellm raises for models it does not list
         return
-    if not info.get("supports_function_calling"):
+    mode = info.get("mode")
+    if info.get("supports_function_calling") is False or mode not in (None, "chat", "responses"):
+        why = "no tool calling" if mode in (None, "chat", "responses") else f"a {mode} model, no chat"
         raise ToolCallingUnsupported(f"--policy tools needs a model with tool calling, and {model!r} has none "
-                                     f"(litellm's model list, provider {info.get('litellm_provider')}); use "
-                                     "--policy code, or a model that calls functions")
+                                     f"(litellm's model list: {why}; provider {info.get('litellm_provider')}); "
+                                     "use --policy code, or a model that calls functions")
 
 
 def system_prompt(max_turns: int, directory: Path | None = None, examples: str = "full") -> str:
