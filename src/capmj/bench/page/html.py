@@ -121,6 +121,8 @@ def _rate_cell(st: Mapping[str, Any] | None, task: str, label: str) -> str:
 
 
 def _profile(view: ProfileView) -> str:
+    if not view.configs:
+        return '<section id="profile"><h2>Capability profile</h2><p>No episode in these folders.</p></section>'
     head = "".join(f"<th>{_e(lab)}</th>" for lab in view.configs)
     body = ""
     for t in sorted(view.tasks, key=_order):
@@ -137,6 +139,8 @@ def _profile(view: ProfileView) -> str:
 
 
 def _bars(view: ProfileView) -> str:
+    if not view.configs:
+        return ""
     return ('<section id="bars"><h2>Success per task</h2>'
             + _fig(bars_svg(view), "success rate per task with 95 % Wilson intervals", "bars-figure")
             + "</section>")
