@@ -29,15 +29,18 @@ def failure_section(summary: Mapping[str, Any], task_label: Callable[[str], str]
     present += sorted({lab for st in summary["overall"].values() for lab in (st.get("failures") or {})} - set(present))
     if not present:
         return []
+    apart = any(st.get("anomalies") for st in summary["overall"].values())
     out = ["", "## Failures", "",
-           "Failed episodes by cause, as counts of n (the cell's episodes); see docs/failures.md for the rules.", "",
-           "| Task | Configuration | n | failed | " + " | ".join(present) + " |",
-           "|---|---|---:|---:|" + "---:|" * len(present)]
+           "Failed episodes by cause, as counts of n (the cell's episodes); see docs/failures.md for the rules."
+           + (" Anomalies (harness failures) are not in n: they are counted in the last column." if apart else ""),
+           "", "| Task | Configuration | n | failed | " + " | ".join(present) + (" | anomalies |" if apart else " |"),
+           "|---|---|---:|---:|" + "---:|" * (len(present) + apart)]
     for name, per in _rows(summary, task_label, order):
         for lab, st in per.items():
             f = st.get("failures") or {}
             out.append(f"| {name} | {lab} | {st['n']} | {st['n'] - st['successes']} | "
-                       + " | ".join(str(f.get(x, 0)) for x in present) + " |")
+                       + " | ".join(str(f.get(x, 0)) for x in present)
+                       + (f" | {st.get('anomalies') or 0} |" if apart else " |"))
     return out
 
 
