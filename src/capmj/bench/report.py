@@ -136,6 +136,7 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
         if others:
             out += ["", f"Overall, all {len(tasks)} tasks: "
                     + ", ".join(f"{lab} {pct_cell(summary['overall'][lab])}" for lab in labels)]
+    out += profile_section(summary.get("profile"))
     out += ["", "## Details", "",
             "| Task | Configuration | n | successes | success | 95 % CI | mean progress | mean primitives "
             "| errors | wall total (s) | wall mean (s) |",
@@ -156,7 +157,6 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     out += _turns_table(rows, labels)
     out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
     out += cost_section(summary, task_label, _order)
-    out += profile_section(summary.get("profile"))
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
     out += anomaly_section(summary.get("anomalies"), task_label)
     out += warnings_section(summary.get("warnings") or [])

@@ -151,7 +151,22 @@ def profile_section(prof: Mapping[str, Any] | None) -> list[str]:
 
     if not prof or not prof.get("configs"):
         return []
-    return ["", "## Capability profile: efficiency", "",
+    base = prof["baseline"]
+    paired = {p["b"]: p["overall"] for p in prof.get("paired") or []}
+    rows = ["", "## Capability profile", "",
+            f"Each configuration over all tasks (the agent's episodes; anomalies excluded), paired against the first, "
+            f"{base}, on the (task, seed) episodes both ran: *only {base}* / *only this* = pairs one of them solved "
+            "(exact McNemar p).", "",
+            f"| Configuration | success | 95 % CI | episodes | only {base} | only this | McNemar p |",
+            "|---|---:|---|---|---:|---:|---:|"]
+    for c in prof["configs"]:
+        cell = prof["overall"][c]
+        lo, hi = cell["ci95"]
+        rate = "—" if cell["success_rate"] is None else f"{100 * cell['success_rate']:.0f} %"
+        pair = paired.get(c)
+        vs = (f"{pair['only_a']} | {pair['only_b']} | {pair['p_value']:.3g}" if pair else "— | — | —")
+        rows.append(f"| {c} | {rate} | {100 * lo:.0f}–{100 * hi:.0f} % | {cell['denominator']} | {vs} |")
+    return rows + ["", "## Capability profile: efficiency", "",
             "Over the agent's episodes (anomalies excluded); *per solved* = the configuration's total over its "
             "episodes divided by the episodes it solved (— when it solved none); $ is unknown (—) when any "
             "episode's price is. Turns = attempt records (multi-turn turns, else plan attempts).", ""] + \
