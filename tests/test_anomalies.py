@@ -161,3 +161,22 @@ def test_an_unreachable_server_stops_the_run_at_start_up_unless_told_not_to_prob
     err = capsys.readouterr().err
     assert "the server did not answer" in err and "--no-probe" in err
     assert not (tmp_path / "a" / "episodes.jsonl").exists()
+
+
+def test_the_probe_of_a_cloud_model_is_one_uncached_completion(tmp_path: Path) -> None:
+    """Without --api-base the probe asks the model itself (here through the stub's URL, as litellm
+    would a provider): a refused key stops the run, an answer lets it start and is never cached."""
+    from capmj.bench.probe import probe_completion
+    from capmj.errors import ModelUnreachable
+    from capmj.llm.config import LLMConfig
+
+    with StubLLMServer() as server:
+        cfg = LLMConfig("openai/stub", api_base=server.base_url, api_key="sk-wrong", cache_dir=tmp_path / "cache",
+                        backoff_s=0.0)
+        server.script(Reply.error(401, "invalid api key"))
+        with pytest.raises(ModelUnreachable, match="a probe request failed.*AuthenticationError"):
+            probe_completion(cfg)
+        server.script("OK")
+        probe_completion(cfg)
+        assert [r["max_tokens"] for r in server.requests] == [8, 8]
+    assert not (tmp_path / "cache").exists() or not any((tmp_path / "cache").rglob("*.json"))
