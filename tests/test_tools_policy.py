@@ -425,3 +425,20 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     assert replay_check([str(tmp_path / "run")]) == 0
     assert len(server.requests) == 0
+
+
+def test_export_keeps_the_calls_and_the_tools(server: StubLLMServer, tmp_path: Path) -> None:
+    from capmj.bench.cli import main
+    from capmj.bench.export import chat_examples
+
+    server.respond_with(turns(lambda r: Reply.calls(("get_color", {"obj": ZONE})), "FINISH"))
+    assert main(["--agent", "llm", "--model", "openai/stub", "--api-base", server.base_url, "--policy", "tools",
+                 "--tasks", TASK, "--seeds", str(SEED), "--workers", "0", "--no-probe",
+                 "--out", str(tmp_path / "run")]) == 0
+    first, second = chat_examples(tmp_path / "run")
+    assert first["tools"] == tool_schemas() and first["messages"][-1]["tool_calls"][0]["function"] == {
+        "name": "get_color", "arguments": json.dumps({"obj": ZONE})}
+    assert [m["role"] for m in second["messages"]] == ["system", "user", "assistant", "tool", "assistant"]
+    assert second["messages"][3] == {"role": "tool", "tool_call_id": first["messages"][-1]["tool_calls"][0]["id"],
+                                     "content": '"orange"'} and second["messages"][-1]["content"] == "FINISH"
+    assert all(set(e) == {"messages"} for e in chat_examples(tmp_path / "run", messages_only=True))

@@ -3,7 +3,8 @@
 
 One JSON line per planner / helper LMP / reporter call that returned a completion, in the OpenAI
 chat fine-tuning format: ``messages`` = the messages sent plus the completion as the final
-``assistant`` message.  ``metadata`` says where the call came from and how its episode ended
+``assistant`` message (with its ``tool_calls`` under ``--policy tools``, whose planner calls also
+carry the ``tools`` they offered).  ``metadata`` says where the call came from and how its episode ended
 (task, seed, attempt, LMP, success, failure label, reporter verdict of that attempt); with
 ``--messages-only`` the lines carry ``messages`` alone, as strict uploaders demand.  See
 docs/export.md.
@@ -17,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
+from capmj.agents.api.tool_schemas import tool_schemas
 from capmj.bench.results import EPISODES, read_records
 from capmj.bench.transcripts import read_calls
 from capmj.errors import ConfigError
@@ -42,9 +44,15 @@ def chat_examples(run_dir: str | Path, *, only_success: bool = False,
             calls = read_calls(run_dir, rec)
         except (OSError, ValueError) as exc:
             raise ConfigError(f"transcript of {rec.task} seed {rec.seed} is unreadable: {exc}") from None
+        tools = tool_schemas() if rec.llm is not None and rec.llm.policy == "tools" else None
         for call in calls:
-            messages = [dict(m) for m in call["messages"]] + [{"role": "assistant", "content": call["completion"]}]
+            answer: dict[str, Any] = {"role": "assistant", "content": call["completion"]}
+            if call.get("tool_calls"):  # --policy tools: the calls the answer made
+                answer["tool_calls"] = call["tool_calls"]
+            messages = [dict(m) for m in call["messages"]] + [answer]
             example: dict[str, Any] = {"messages": messages}
+            if tools is not None and not messages_only and str(call.get("purpose", "")).startswith("planner#"):
+                example["tools"] = tools  # what the planner requests offered (the format's key)
             if not messages_only:
                 lmp, _, n = str(call.get("purpose", "")).partition("#")
                 example["metadata"] = {
