@@ -87,6 +87,10 @@ def test_a_configuration_and_the_command_line_may_not_disagree() -> None:
     with pytest.raises(ConfigError, match="configuration 'R1' sets reporter='text' but the command line gives "
                                           "reporter='vlm'"):
         merged(r1, {"reporter": "vlm"})
+    # an option left out because the agent does it anyway still may not be overridden
+    with pytest.raises(ConfigError, match="configuration 'S1' sets perception='state' but the command line gives "
+                                          "perception='rgbd'"):
+        merged(resolve("S1")[0], {"perception": "rgbd"})
 
 
 # ---------------------------------------------------------------------- item 7: the measured defaults

@@ -33,19 +33,25 @@ class Configuration:
     name: str
     options: Mapping[str, Any] = field(default_factory=dict)
     about: str = ""
+    implied: Mapping[str, Any] = field(default_factory=dict)
+    """Options asked for at the value the agent has without them (:data:`IMPLICIT`), left out of
+    ``options`` by :func:`check` but still compared with the command line's (:func:`merged`)."""
 
     def __post_init__(self) -> None:
         if not self.name or any(c in self.name for c in ",/\\ \t\n") or self.name.startswith("."):
             raise ConfigError(f"configuration name {self.name!r} must be non-empty, without commas, slashes or "
                               "spaces, and not start with a dot")
         object.__setattr__(self, "options", dict(self.options))
+        object.__setattr__(self, "implied", dict(self.implied))
 
     def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "options": dict(self.options), "about": self.about}
+        out = {"name": self.name, "options": dict(self.options), "about": self.about}
+        return out | ({"implied": dict(self.implied)} if self.implied else {})
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Configuration":
-        return cls(str(data["name"]), dict(data.get("options") or {}), str(data.get("about") or ""))
+        return cls(str(data["name"]), dict(data.get("options") or {}), str(data.get("about") or ""),
+                   dict(data.get("implied") or {}))
 
 
 TIERS: tuple[Configuration, ...] = (
@@ -92,17 +98,17 @@ def check(config: Configuration) -> Configuration:
     flag's choices or of the wrong type is refused; options at their implicit value are left out."""
     flags = _flags()
     out: dict[str, Any] = {}
+    implied: dict[str, Any] = dict(config.implied)
     for key, value in config.options.items():
+        if IMPLICIT.get(key) == value:
+            implied[key] = value
+            continue
         if key not in flags:
-            if IMPLICIT.get(key) == value:
-                continue
             raise ConfigError(f"configuration {config.name!r} needs option {key!r} ({key}={value}), which this "
                               f"capmj does not have yet (--{key.replace('_', '-')}); options there are: "
                               f"{', '.join(sorted(flags))}")
-        if IMPLICIT.get(key) == value:
-            continue
         out[key] = _value(config.name, key, value, flags[key])
-    return replace(config, options=out)
+    return replace(config, options=out, implied=implied)
 
 
 def _value(name: str, key: str, value: Any, flag: Any) -> Any:
@@ -170,9 +176,10 @@ def resolve(names: str, files: Sequence[Configuration] = ()) -> tuple[Configurat
 def merged(config: Configuration, shared: Mapping[str, Any]) -> dict[str, Any]:
     """The agent options of one configuration of a grid: the command line's ``shared`` options,
     then the configuration's.  An option both set, to different values, is a ``ConfigError``."""
-    clash = sorted(k for k, v in config.options.items() if k in shared and shared[k] != v)
+    asked = {**config.implied, **config.options}
+    clash = sorted(k for k, v in asked.items() if k in shared and shared[k] != v)
     if clash:
-        raise ConfigError(f"configuration {config.name!r} sets {', '.join(f'{k}={config.options[k]!r}' for k in clash)}"
+        raise ConfigError(f"configuration {config.name!r} sets {', '.join(f'{k}={asked[k]!r}' for k in clash)}"
                           f" but the command line gives {', '.join(f'{k}={shared[k]!r}' for k in clash)}; leave the "
                           "option off the command line or use another configuration")
     return {**shared, **config.options}
