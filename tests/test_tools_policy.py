@@ -421,6 +421,8 @@ def test_the_documented_command_runs_and_replays_exactly(server: StubLLMServer, 
     tools = summary["overall"]["llm openai/stub"]["loop"]["tools"]
     assert tools == {"episodes": 2, "mean_turns": 2.0, "calls": 2, "content_json_calls": 2,
                      "content_json_share": 1.0, "ended_by_model": 2, "finish_agree": 0, "no_finish": 0}
+    table = (tmp_path / "run" / "summary.md").read_text().split("## Tool calling (LLM agent, --policy tools)")[1]
+    assert "| 2.00 | 2 | 2/2 (100 %) | 0/2 (0 %) | 0 |" in table
     server.reset()
     server.respond_with(lambda request: Reply.error(500, "must not be called"))
     assert replay_check([str(tmp_path / "run")]) == 0

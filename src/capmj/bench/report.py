@@ -155,6 +155,7 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
                        f"{_fmt(st['mean_progress'])} | {_fmt(st['mean_primitives'])} | {st['errors']} | {_fmt(st['wall_s_total'], 1)} | {_fmt(st['wall_s_mean'])} |")
     out += _loop_table(rows, labels)
     out += _turns_table(rows, labels)
+    out += _tools_table(rows, labels)
     out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
     out += cost_section(summary, task_label, _order)
     out += comparison_section(summary.get("comparisons") or [], task_label, _order)
@@ -220,6 +221,27 @@ def _turns_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence
         out.append(f"| {name} | {lab} | {_count_cell(st['successes'], st['n'])} | {tp['mean_turns']:.2f} | "
                    f"{_count_cell(tp['finish_agree'], tp['finished'])} | {tp['finish_false_positives']} | "
                    f"{tp['no_finish']} |")
+    return out
+
+
+def _tools_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
+    """The tool-calling table (``--policy tools`` cells only, ``loop.tools``; empty without any)."""
+    cells = [(t, lab, tp, st) for t, per in rows for lab in labels
+             for st in [per.get(lab) or {}] for tp in [(st.get("loop") or {}).get("tools")] if tp]
+    if not cells:
+        return []
+    out = ["", "## Tool calling (LLM agent, --policy tools)", "",
+           "*calls as JSON* = function calls the model wrote as JSON in its text instead of tool_calls (read and "
+           "labelled content_json); *ended, goal met* = episodes the model ended (no call or FINISH) in which the "
+           "task predicate held; *no FINISH* = episodes that used all their turns (failure no_finish). "
+           "See docs/llm.md.", "",
+           "| Task | Configuration | success | turns/ep | calls | calls as JSON | ended, goal met | no FINISH |",
+           "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for t, lab, tp, st in cells:
+        name = t if t.startswith("**") else task_label(t)
+        out.append(f"| {name} | {lab} | {_count_cell(st['successes'], st['n'])} | {tp['mean_turns']:.2f} | "
+                   f"{tp['calls']} | {_count_cell(tp['content_json_calls'], tp['calls'])} | "
+                   f"{_count_cell(tp['finish_agree'], tp['ended_by_model'])} | {tp['no_finish']} |")
     return out
 
 
