@@ -6,15 +6,16 @@ two loose blocks elsewhere.  Each scene is run twice from the same start, with p
 straight motion of before: ``MotionConfig(plan_collisions=False)``) and on:
 
 - ``pick_and_place``: one primitive from the pick point to the place point;
-- ``low_move``: the tool moved, as a low-level move (``Motion.move_to_pose``), from 12 cm above
-  one side of the obstacle to 12 cm above the other, straight across it.
+- ``low_move``: the tool moved, as a low-level move (``Motion.move_to_pose``), 12 cm above the
+  table from 13 cm before the obstacle's centre to 13 cm past it, along the pick-to-place
+  direction: straight across it.
 
 A *disturbance* is an object other than the carried one that ends (after settling) more than 5 mm
 from where it was; ``control`` counts those of the same scene left alone for as long, so a tower
 that falls by itself is not blamed on the arm.  Per primitive: wall seconds (median, p95) with
 planning off and on, and the seconds spent checking and planning.  Last, the oracle over every
-task × ``--oracle-seeds`` test seeds with planning off and on: success and the episode's cost
-(wall and simulated seconds, physics steps).
+task × ``--oracle-seeds`` test seeds with planning off and on (each episode twice in a row, as the
+machine's load drifts): success and the episode's cost (wall and simulated seconds).
 
     nice python benchmarks/obstacles.py [--scenes 200] [--seed 0] [--oracle-seeds 3] > benchmarks/results/obstacles.json
 """
@@ -42,12 +43,14 @@ from capmj.sim.world import World  # noqa: E402
 
 DISTURBED_M = 0.005
 LOW_MOVE_Z = 0.12
+LOW_MOVE_HALF = 0.13
+"""m either side of the obstacle's centre where the low-level move starts and ends (clear of it)."""
 KINDS = ("tower", "bowl", "fixture")
 
 
-def scene(rng: np.random.Generator) -> tuple[str, list[ObjectSpec], np.ndarray, np.ndarray]:
-    """(obstacle description, objects, pick xy, place xy): block 1 at the pick point, the obstacle
-    between pick and place, two loose small blocks elsewhere."""
+def scene(rng: np.random.Generator) -> tuple[str, list[ObjectSpec], np.ndarray, np.ndarray, np.ndarray]:
+    """(obstacle description, objects, pick xy, place xy, obstacle centre xy): block 1 at the pick
+    point, the obstacle between pick and place, two loose small blocks elsewhere."""
     while True:
         pick = np.array([rng.uniform(0.3, 0.7), rng.uniform(-0.4, 0.4)])
         place = np.array([rng.uniform(0.3, 0.7), rng.uniform(-0.4, 0.4)])
@@ -84,7 +87,7 @@ def scene(rng: np.random.Generator) -> tuple[str, list[ObjectSpec], np.ndarray, 
         base = max(o.obj_id for o in objs) + 1
         objs += [ObjectSpec(base + k, "block", "orange", (float(xy[0]), float(xy[1]), 0.02), size="small")
                  for k, xy in enumerate(loose)]
-        return what, objs, pick, place
+        return what, objs, pick, place, centre
 
 
 def disturbed(w: World, before: dict[int, np.ndarray], carried: int | None) -> list[int]:
@@ -92,7 +95,8 @@ def disturbed(w: World, before: dict[int, np.ndarray], carried: int | None) -> l
     return [i for i, p in before.items() if i != carried and np.linalg.norm(np.asarray(w.pose(i).pos) - p) > DISTURBED_M]
 
 
-def run_scene(objs: list[ObjectSpec], pick: np.ndarray, place: np.ndarray, plan: bool, seed: int) -> dict[str, Any]:
+def run_scene(objs: list[ObjectSpec], pick: np.ndarray, place: np.ndarray, centre: np.ndarray, plan: bool,
+              seed: int) -> dict[str, Any]:
     out: dict[str, Any] = {}
     # the primitive
     w = World(objs)
@@ -111,7 +115,7 @@ def run_scene(objs: list[ObjectSpec], pick: np.ndarray, place: np.ndarray, plan:
     before = {i: np.asarray(w.pose(i).pos).copy() for i in w.movable_ids}
     arm = Primitives(w, MotionConfig(plan_collisions=plan), seed=seed)
     d = (place - pick) / np.linalg.norm(place - pick)
-    a, b = pick + 0.08 * d, place - 0.08 * d
+    a, b = centre - LOW_MOVE_HALF * d, centre + LOW_MOVE_HALF * d
     status = "ok"
     t0 = time.perf_counter()
     try:
@@ -157,6 +161,15 @@ def summarise(rows: list[dict[str, Any]], part: str) -> dict[str, Any]:
             "with_planned_moves": sum(r["planned_moves"] > 0 for r in rs),
         }
     out["on_off_median_wall_ratio"] = out["on"]["wall_s"]["median"] / out["off"]["wall_s"]["median"]
+    # what planning costs in outcomes: refused (no_path) where the straight motion disturbed
+    # nothing, and succeeded only with planning
+    out["refused_where_straight_was_harmless"] = sum(
+        r["on"][part]["status"] == "no_path" and r["off"][part]["status"] == "ok" and not r["off"][part]["disturbed"]
+        for r in rows)
+    out["refused_where_straight_disturbed"] = sum(
+        r["on"][part]["status"] == "no_path" and bool(r["off"][part]["disturbed"]) for r in rows)
+    out["ok_without_disturbance"] = {mode: sum(r[mode][part]["status"] == "ok" and not r[mode][part]["disturbed"]
+                                               for r in rows) for mode in ("off", "on")}
     # the disturbances planning removed and the ones it left, by kind of obstacle
     by_kind: dict[str, dict[str, int]] = {}
     for r in rows:
@@ -176,25 +189,27 @@ def oracle_grid(seeds: list[int]) -> dict[str, Any]:
     from capmj.tasks.registry import get_task, resolve
 
     names = resolve("all")
-    out: dict[str, Any] = {}
-    for mode, plan in (("off", False), ("on", True)):
-        # Motion makes its MotionConfig() when none is given (as an episode's does): switch its default.
-        motion_module.MotionConfig = functools.partial(MotionConfig, plan_collisions=plan)  # type: ignore[misc]
-        try:
-            eps = []
-            for name in names:
-                for seed in seeds:
+    eps: dict[str, list[dict[str, Any]]] = {"off": [], "on": []}
+    try:
+        for name in names:
+            for seed in seeds:
+                for mode, plan in (("off", False), ("on", True)):  # interleaved: the machine's load drifts
+                    # Motion makes its MotionConfig() when none is given (as an episode's does): switch its default.
+                    motion_module.MotionConfig = functools.partial(MotionConfig, plan_collisions=plan)  # type: ignore[misc]
                     t0 = time.perf_counter()
                     r = run_episode(get_task(name), seed, OracleAgent())
-                    eps.append({"task": name, "seed": seed, "success": r.success, "wall_s": time.perf_counter() - t0,
-                                "sim_s": r.sim_s, "primitives": r.primitives, "error": r.error})
-        finally:
-            motion_module.MotionConfig = MotionConfig  # type: ignore[misc]
-        out[mode] = {"episodes": len(eps), "success": sum(e["success"] for e in eps),
-                     "wall_s_per_episode": quantiles([e["wall_s"] for e in eps]),
-                     "sim_s_per_episode": quantiles([e["sim_s"] for e in eps]),
-                     "primitives": sum(e["primitives"] for e in eps),
-                     "failures": [e for e in eps if not e["success"]]}
+                    eps[mode].append({"task": name, "seed": seed, "success": r.success,
+                                      "wall_s": time.perf_counter() - t0, "sim_s": r.sim_s,
+                                      "primitives": r.primitives, "error": r.error})
+    finally:
+        motion_module.MotionConfig = MotionConfig  # type: ignore[misc]
+    out: dict[str, Any] = {}
+    for mode, es in eps.items():
+        out[mode] = {"episodes": len(es), "success": sum(e["success"] for e in es),
+                     "wall_s_per_episode": quantiles([e["wall_s"] for e in es]),
+                     "sim_s_per_episode": quantiles([e["sim_s"] for e in es]),
+                     "primitives": sum(e["primitives"] for e in es),
+                     "failures": [e for e in es if not e["success"]]}
     out["wall_ratio_mean"] = out["on"]["wall_s_per_episode"]["mean"] / out["off"]["wall_s_per_episode"]["mean"]
     return out
 
@@ -209,10 +224,10 @@ def main(argv: list[str] | None = None) -> int:
     t_start = time.perf_counter()
     for k in range(args.scenes):
         rng = np.random.default_rng([args.seed, k])
-        what, objs, pick, place = scene(rng)
+        what, objs, pick, place, centre = scene(rng)
         row: dict[str, Any] = {"scene": k, "obstacle": what, "pick": pick.round(3).tolist(), "place": place.round(3).tolist()}
         for mode, plan in (("off", False), ("on", True)):
-            row[mode] = run_scene(objs, pick, place, plan, seed=args.seed * 100003 + k)
+            row[mode] = run_scene(objs, pick, place, centre, plan, seed=args.seed * 100003 + k)
         row["control"] = control(objs, max(row["off"]["pick_and_place"]["steps"], 1) + 2000)
         rows.append(row)
         print(json.dumps({"scene": k, "obstacle": what,
