@@ -216,7 +216,7 @@ class Motion:
 
     def move_to(self, pos: np.ndarray, yaw: float, speed: float | None = None,
                 stop: Callable[[], bool] | None = None, slow_last: float = 0.0,
-                guarded: bool = False) -> tuple[str, int]:
+                guarded: bool | None = None) -> tuple[str, int]:
         """Move the tip in a straight line; returns ("ok" | "stopped" | "unreachable", steps).
         The last ``slow_last`` metres run at ``approach_speed`` without stopping first (a guarded
         descent: fast through free space, slow where contact is expected; ``guarded``: see
@@ -225,7 +225,7 @@ class Motion:
 
     def move_through(self, points: Sequence[tuple[np.ndarray, float]], speed: float | None = None,
                      stop: Callable[[], bool] | None = None, slow_last: float = 0.0,
-                     contact_before: float = 0.0, guarded: bool = False) -> tuple[str, int, int]:
+                     contact_before: float = 0.0, guarded: bool | None = None) -> tuple[str, int, int]:
         """Move the tip along straight lines through each ``(pos, yaw)`` in turn, rounding each
         corner within ``blend`` (the next line starts while the last one brakes, as a UR
         controller's blend radius does) instead of stopping there.  ``stop`` and ``slow_last``
@@ -235,10 +235,11 @@ class Motion:
         With ``plan_collisions`` every line is checked for collisions first (:meth:`clear_legs`):
         one that is not clear is replaced by a joint-space path around the obstacle, and
         :class:`~capmj.errors.MotionPlanningError` is raised, before anything moves, when there is
-        none.  A ``guarded`` last line (a descent that ``stop`` ends at its contact) may end
-        touching what is under its end; ``contact_before`` is how far before its end the contact
-        is expected (a descent's overshoot), the part beyond which is not checked for the arm's
-        links.  ``stop`` alone (a watch for any contact) changes no check.
+        none.  A ``guarded`` last line (a descent that ``stop`` ends at its contact; by default
+        any move with a ``stop``) may end touching what is under its end; ``contact_before`` is
+        how far before its end the contact is expected (a descent's overshoot), the part beyond
+        which is not checked for the arm's links.  ``guarded=False`` with a ``stop`` (a watch for
+        any contact) keeps every check and lets the last line be planned around an obstacle.
 
         The start pose is read from the commanded joints, so a state restore (re-plan) or a
         stopped move can never leave a stale start yaw behind.
@@ -246,7 +247,8 @@ class Motion:
         plans = self.plan_lines(points, speed, slow_last)
         if isinstance(plans, int):
             return "unreachable", 0, plans
-        plans = self.clear_legs(plans, guarded=guarded, contact_before=contact_before)
+        plans = self.clear_legs(plans, guarded=stop is not None if guarded is None else guarded,
+                                contact_before=contact_before)
         status, steps = self.run_legs(plans, np.asarray(points[-1][0], float), stop)
         return status, steps, -1
 
@@ -346,7 +348,7 @@ class Motion:
         "unreachable" (no IK solution) moves nothing.  Raises
         :class:`~capmj.errors.MotionPlanningError` before moving when no clear path exists."""
         pos = np.asarray(pos, float)
-        status, steps, _ = self.move_through([(pos, yaw)], speed, stop)  # not guarded: nothing may touch
+        status, steps, _ = self.move_through([(pos, yaw)], speed, stop, guarded=False)  # nothing may touch
         if status != "unreachable":
             return status, steps
         res = self.ik.solve(pos, yaw, self.world.arm_ctrl())
