@@ -343,18 +343,29 @@ class Motion:
                      speed: float | None = None) -> tuple[str, int]:
         """Move the tip to ``pos`` pointing down with tool ``yaw``, by the most direct clear way: a
         straight tool line when it is reachable (planned around an obstacle when it is not clear,
-        as :meth:`move_through`), else a joint-space move to the IK solution nearest the current
-        joints (:meth:`move_joints`).  Returns ("ok" | "stopped" | "unreachable", steps);
-        "unreachable" (no IK solution) moves nothing.  Raises
-        :class:`~capmj.errors.MotionPlanningError` before moving when no clear path exists."""
+        as :meth:`move_through`), else a joint-space move (:meth:`move_joints`) to the arm's
+        postures for that pose (:meth:`branches`), nearest first, the first with a clear path.
+        Returns ("ok" | "stopped" | "unreachable", steps); "unreachable" (no IK solution) moves
+        nothing.  Raises the first :class:`~capmj.errors.MotionPlanningError` before moving when
+        no posture has a clear path."""
         pos = np.asarray(pos, float)
-        status, steps, _ = self.move_through([(pos, yaw)], speed, stop, guarded=False)  # nothing may touch
-        if status != "unreachable":
-            return status, steps
-        res = self.ik.solve(pos, yaw, self.world.arm_ctrl())
-        if res.q is None:
+        first: MotionPlanningError | None = None
+        try:
+            status, steps, _ = self.move_through([(pos, yaw)], speed, stop, guarded=False)  # nothing may touch
+            if status != "unreachable":
+                return status, steps
+        except MotionPlanningError as exc:
+            first = exc
+        postures = self.branches(pos, yaw)
+        if not postures:
             return "unreachable", 0
-        return self.move_joints(res.q, stop)
+        for q in postures:  # the arm's other postures for the same tool pose, nearest first
+            try:
+                return self.move_joints(q, stop)
+            except MotionPlanningError as exc:
+                first = first or exc
+        assert first is not None
+        raise first
 
     def joint_plan(self, waypoints: np.ndarray) -> SegmentPlan:
         """A timed joint-space move through ``waypoints`` (rows), straight in joint space between
@@ -420,6 +431,10 @@ class Motion:
             target = f"({where[0]:.3f}, {where[1]:.3f}, {where[2]:.3f})"
             if last_guarded:
                 raise MotionPlanningError(f"no collision-free path to {target}: {hit[1]}", status="no_path")
+            at_goal = chk.collision(plan.qs[-1], allow)
+            if at_goal is not None:
+                raise MotionPlanningError(f"no collision-free path to {target}: at the target itself {at_goal}",
+                                          status="no_path")
             around = self._plan_around(plan.qs[0], plan.qs[-1], allow)
             if around is None:
                 raise MotionPlanningError(f"no collision-free path to {target}: {hit[1]} on the straight way, and "
