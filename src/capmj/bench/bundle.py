@@ -26,7 +26,7 @@ from typing import Any, Mapping
 
 from capmj.bench.manifest import git_state, package_versions
 from capmj.bench.page import REPORT_HTML, write_page
-from capmj.bench.page.html import reproduce_commands
+from capmj.bench.config import reproduce_commands
 from capmj.bench.page.view import profile_view
 from capmj.bench.report import report
 from capmj.bench.results import load_json

@@ -18,9 +18,10 @@ old resume times become ``resumes`` entries whose changes are unknown.
 from __future__ import annotations
 
 import os
+import shlex
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from capmj.bench.configs import Configuration, merged, with_measured_defaults
 from capmj.bench.executor import Execution
@@ -236,5 +237,19 @@ def config_json(config: BenchConfig, argv: Sequence[str], grid: Mapping[str, Any
     return out
 
 
+def reproduce_commands(cfg: Mapping[str, Any]) -> list[str]:
+    """The commands that made a run folder, from its ``config.json``: the first part's command
+    line, then one per resume (each as given)."""
+    cmds = []
+    argv: Iterable[str] | None = cfg.get("argv")
+    if argv is not None:
+        cmds.append(shlex.join(["python", "-m", "capmj.bench", *argv]))
+    for r in cfg.get("resumes") or []:
+        if r.get("argv"):
+            cmds.append(shlex.join(["python", "-m", "capmj.bench", *r["argv"]]))
+    return cmds
+
+
+
 __all__ = ["BenchConfig", "DEFAULT_AGENT", "DEFAULT_TASKS", "Given", "SCHEMA", "changes", "config_json",
-           "effective_args", "resumes", "stored_config"]
+           "effective_args", "reproduce_commands", "resumes", "stored_config"]

@@ -49,7 +49,8 @@ from capmj.records import EpisodeRecord
 from capmj.tasks.builtin import GENERATED_NUMBERS, TASK_LETTERS
 
 
-def _order(task: str) -> tuple[int, str]:
+def task_order(task: str) -> tuple[int, str]:
+    """The sort key of a task in every table: benchmark tasks A–J, then others by name, then generated 1–10."""
     letter = TASK_LETTERS.get(task)
     if letter:
         return (0, letter)
@@ -113,7 +114,7 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     """The Markdown report: the Table-5.2-shaped success table (plus the Table-5.4-shaped one of
     the generated tasks when there are any), then per-cell details."""
     labels = list(summary["overall"])
-    tasks = sorted(summary["tasks"], key=_order)
+    tasks = sorted(summary["tasks"], key=task_order)
     generated = [t for t in tasks if t in GENERATED_NUMBERS]
     others = [t for t in tasks if t not in GENERATED_NUMBERS]
     warning = headline(summary.get("anomalies") or {})
@@ -156,9 +157,9 @@ def markdown(summary: Mapping[str, Any], title: str = "capmj benchmark results",
     out += _loop_table(rows, labels)
     out += _turns_table(rows, labels)
     out += _tools_table(rows, labels)
-    out += failure_section(summary, task_label, _order) + perception_section(summary, task_label, _order)
-    out += cost_section(summary, task_label, _order)
-    out += comparison_section(summary.get("comparisons") or [], task_label, _order)
+    out += failure_section(summary, task_label, task_order) + perception_section(summary, task_label, task_order)
+    out += cost_section(summary, task_label, task_order)
+    out += comparison_section(summary.get("comparisons") or [], task_label, task_order)
     out += anomaly_section(summary.get("anomalies"), task_label)
     out += warnings_section(summary.get("warnings") or [])
     return "\n".join(out) + "\n"
@@ -254,7 +255,7 @@ def plot(summary: Mapping[str, Any], path: str | Path, title: str = "capmj bench
     import numpy as np
 
     labels = list(summary["overall"])
-    tasks = sorted(summary["tasks"], key=_order)
+    tasks = sorted(summary["tasks"], key=task_order)
     rows = [(task_label(t), summary["tasks"][t]) for t in tasks] + [("Overall", summary["overall"])]
     k = max(1, len(labels))
     height = 0.8 / k
@@ -439,4 +440,4 @@ def report(dirs: Sequence[str | Path], out_dir: str | Path | None = None, *, all
 
 
 __all__ = ["GENERATED_NUMBERS", "TASK_LETTERS", "load_folders", "markdown", "pct_cell", "plot", "pooled", "report",
-           "summarize_dir", "task_label", "write_summary"]
+           "summarize_dir", "task_label", "task_order", "write_summary"]

@@ -13,18 +13,18 @@ from __future__ import annotations
 import base64
 import datetime as _dt
 import html
-import shlex
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 from capmj.atomic import atomic_write
 from capmj.bench.page.gallery import FailedEpisode, failed_episodes, replay_command
 from capmj.bench.page.plots import bars_svg, heatmap_svg
 from capmj.bench.page.view import METRICS, ProfileView, profile_view
-from capmj.bench.report import _order, task_label
+from capmj.bench.report import task_label, task_order
 from capmj.bench.results import CONFIG, load_json
+from capmj.bench.config import reproduce_commands
 
-__all__ = ["GALLERY_MAX", "REPORT_HTML", "headline", "render_page", "reproduce_commands", "write_page"]
+__all__ = ["GALLERY_MAX", "REPORT_HTML", "headline", "render_page", "write_page"]
 
 REPORT_HTML = "report.html"
 """The page's file name in a result folder (``report RUN --html`` with no path)."""
@@ -125,7 +125,7 @@ def _profile(view: ProfileView) -> str:
         return '<section id="profile"><h2>Capability profile</h2><p>No episode in these folders.</p></section>'
     head = "".join(f"<th>{_e(lab)}</th>" for lab in view.configs)
     body = ""
-    for t in sorted(view.tasks, key=_order):
+    for t in sorted(view.tasks, key=task_order):
         body += (f'<tr data-task="{_e(t)}"><td>{_e(task_label(t))}</td>'
                  + "".join(_rate_cell(view.cells.get(c, {}).get(t), t, c) for c in view.configs) + "</tr>")
     body += ('<tr data-task="" class="overall"><td><b>Overall</b></td>'
@@ -134,7 +134,7 @@ def _profile(view: ProfileView) -> str:
             "<p>Success rate per task and configuration (colour; episodes solved of n in each cell); below, "
             "the same with 95 % Wilson intervals. n counts the agent's episodes: anomalies (harness failures) "
             "are excluded and counted beside the rate.</p>"
-            + _fig(heatmap_svg(view, _order), "heat map of the success rate, tasks × configurations", "heatmap")
+            + _fig(heatmap_svg(view, task_order), "heat map of the success rate, tasks × configurations", "heatmap")
             + f'<table id="profile-table"><tr><th>task</th>{head}</tr>{body}</table></section>')
 
 
@@ -155,7 +155,7 @@ def _comparisons(view: ProfileView) -> str:
            "exact two-sided McNemar test on the discordant pairs (only one of the two solved it).</p>"]
     for c in view.paired:
         a, b = c["a"], c["b"]
-        rows = [(t, c["tasks"][t]) for t in sorted(c["tasks"], key=_order)] + [("", c["overall"])]
+        rows = [(t, c["tasks"][t]) for t in sorted(c["tasks"], key=task_order)] + [("", c["overall"])]
         out.append(f'<h3>{_e(a)} vs {_e(b)}</h3><table class="comparison"{_attrs(a=a, b=b)}>'
                    f"<tr><th>task</th><th>pairs</th><th>{_e(a)}</th><th>{_e(b)}</th><th>only {_e(a)}</th>"
                    f"<th>only {_e(b)}</th><th>McNemar p</th><th></th></tr>")
@@ -264,7 +264,7 @@ def _stamp(summary: Mapping[str, Any], configs: Mapping[str, Mapping[str, Any] |
     if isinstance(stamp, Mapping) and isinstance(stamp.get("tasks"), Mapping):
         rows = "".join(f'<tr{_attrs(task=t, stamp=str((v or {}).get("stamp", "")))}><td>{_e(task_label(t))}</td>'
                        f'<td><code>{_e(_short((v or {}).get("stamp")))}</code></td><td>{_e((v or {}).get("kind", ""))}</td>'
-                       "</tr>" for t, v in sorted(stamp["tasks"].items(), key=lambda kv: _order(kv[0])))
+                       "</tr>" for t, v in sorted(stamp["tasks"].items(), key=lambda kv: task_order(kv[0])))
         out.append(f'<p id="task-stamp"{_attrs(stamp=str(stamp.get("overall", "")))}>Task set stamp '
                    f'<code>{_e(_short(stamp.get("overall")))}</code> (capmj {_e(stamp.get("capmj", "?"))}, MJCF '
                    f'<code>{_e(_short(stamp.get("mjcf")))}</code>, prompts <code>{_e(_short(stamp.get("prompts")))}</code>); '
@@ -333,7 +333,7 @@ def _gallery(episodes: Sequence[FailedEpisode], summary: Mapping[str, Any]) -> s
     anomalous = {(str(a.get("config")), str(a.get("task")), a.get("seed")) for a in listed}
     configs = {c: i for i, c in enumerate(dict.fromkeys(e.config for e in episodes))}
     flagged = [(e, (e.config, e.task, e.seed) in anomalous) for e in episodes]
-    flagged.sort(key=lambda ea: (ea[1], configs[ea[0].config], _order(ea[0].task), ea[0].seed))
+    flagged.sort(key=lambda ea: (ea[1], configs[ea[0].config], task_order(ea[0].task), ea[0].seed))
     if not episodes:
         return '<section id="gallery"><h2>Failure gallery</h2><p>No failed episode.</p></section>'
     shown = flagged[:GALLERY_MAX]
@@ -351,19 +351,6 @@ def _reproduce(configs: Mapping[str, Mapping[str, Any] | None]) -> str:
         for cmd in reproduce_commands(cfg or {}):
             out.append(f"<p><code>{_e(src)}</code>:</p><code class=\"cmd\">{_e(cmd)}</code>")
     return "".join(out) + "</section>"
-
-
-def reproduce_commands(cfg: Mapping[str, Any]) -> list[str]:
-    """The commands that made a run folder, from its ``config.json``: the first part's command
-    line, then one per resume (each as given)."""
-    cmds = []
-    argv: Iterable[str] | None = cfg.get("argv")
-    if argv is not None:
-        cmds.append(shlex.join(["python", "-m", "capmj.bench", *argv]))
-    for r in cfg.get("resumes") or []:
-        if r.get("argv"):
-            cmds.append(shlex.join(["python", "-m", "capmj.bench", *r["argv"]]))
-    return cmds
 
 
 # ---------------------------------------------------------------------- the page
