@@ -287,3 +287,19 @@ def test_the_llm_agent_plans_at_the_low_level_without_examples() -> None:
     head = planner_prompt("low", "none").template.split("<<QUESTION>>")[0]
     assert head.strip() in sent and "#@" not in sent
     assert "put_first_on_second" not in sent and sent.count("objects = [") == 1  # the question's, no example's
+
+
+def test_the_command_line_and_the_manifest_carry_api_and_examples() -> None:
+    from capmj.bench.cli import build_parser
+    from capmj.bench.manifest import build_manifest
+    from capmj.bench.options import given_agent_options
+
+    args = build_parser().parse_args(["--agent", "reference", "--api", "low", "--examples", "none"])
+    options = given_agent_options(args)
+    assert options == {"api": "low", "examples": "none"}
+    agent = make_agent("reference", **options)
+    task = [get_task("stack-all-blocks-on-a-zone")]
+    assert build_manifest(agent, task)["api"] == {"level": "low", "examples": "none"}
+    assert "api" not in build_manifest(make_agent("reference"), task)  # the defaults leave manifests as they were
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["--agent", "reference", "--api", "middle"])
