@@ -150,7 +150,7 @@ class RobotDriver:
         def run(watch: ContactWatch) -> str:
             m = self.motion
             if legs:
-                return m.move_through(legs, stop=watch.new_contact)[0]
+                return m.move_through(legs, stop=watch.new_contact, guarded=False)[0]  # watched, not guarded: nothing may touch
             return m.move_to_pose(pos, yaw, stop=watch.new_contact)[0]
 
         self._move(fn, run, guarded=False)
