@@ -31,8 +31,11 @@ def pick(name):
     return yaw
 
 
-def surface_under(x, y, reach, skip):
-    # the highest top of an object whose box reaches within `reach` of (x, y), 0 for the table
+def surface_under(x, y, held, skip):
+    # the highest top of an object whose box comes within reach of the held object centred at (x, y)
+    # (its half diagonal and 1 cm: its neighbours too), 0 for the table: the planned approach ends
+    # above all of them, and a guarded descent goes the rest of the way
+    reach = 1.5 * max(held['half_size'][0], held['half_size'][1]) + 0.01
     tops = [0.0]
     for o in get_objects():
         b = o['bbox']
@@ -50,7 +53,7 @@ def place(name, x, y, yaw=None):
     c, s = math.cos(turn), math.sin(turn)
     tx, ty = x - (c * dx - s * dy), y - (s * dx + c * dy)
     hang = tip[2] - o['bbox'][2]  # from the tip down to the object's bottom
-    surface = surface_under(x, y, max(o['half_size'][0], o['half_size'][1]), name)
+    surface = surface_under(x, y, o, name)
     move_to_pose([tx, ty, surface + hang + 0.03], tool_yaw + turn)
     move_until_contact([tx, ty, hang - 0.04], tool_yaw + turn)
     suction_off()
