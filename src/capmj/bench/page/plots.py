@@ -65,7 +65,7 @@ def heatmap_svg(view: ProfileView, order: Callable[[str], Any]) -> bytes:
     image = ax.imshow(np.ma.masked_invalid(rates), cmap=cmap, vmin=0, vmax=100, aspect="auto", zorder=0)
     ax.set_xticks(range(len(labels)))
     ax.set_xticklabels([textwrap.fill(lab, 24) for lab in labels], fontsize=8)
-    ax.xaxis.tick_top()
+    ax.get_xaxis().tick_top()
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels([name for name, _ in rows], fontsize=8)
     ax.axhline(len(rows) - 1.5, color="black", linewidth=1)
