@@ -18,7 +18,11 @@ def quarter(angle):
     return (angle + math.pi / 4) % (math.pi / 2) - math.pi / 4
 
 
+placed = {}  # name -> (x, y, half side, top) of each block this plan put down, where it let go of it
+
+
 def pick(name):
+    placed.pop(name, None)
     o = obj(name)
     x, y, _ = o['position']
     top = o['bbox'][5]
@@ -34,13 +38,17 @@ def pick(name):
 def surface_under(x, y, held, skip):
     # the highest top of an object whose box comes within reach of the held object centred at (x, y)
     # (its half diagonal and 1 cm: its neighbours too), 0 for the table: the planned approach ends
-    # above all of them, and a guarded descent goes the rest of the way
+    # above all of them, and a guarded descent goes the rest of the way.  What this plan put down
+    # counts too, as it left it: the cameras may not tell blocks packed close together apart.
     reach = 1.5 * max(held['half_size'][0], held['half_size'][1]) + 0.01
     tops = [0.0]
     for o in get_objects():
         b = o['bbox']
         if o['name'] != skip and b[0] - reach <= x <= b[3] + reach and b[1] - reach <= y <= b[4] + reach:
             tops.append(b[5])
+    for px, py, h, top in placed.values():
+        if abs(px - x) <= h * 1.5 + reach and abs(py - y) <= h * 1.5 + reach:
+            tops.append(top)
     return max(tops)
 
 
@@ -56,7 +64,9 @@ def place(name, x, y, yaw=None):
     surface = surface_under(x, y, o, name)
     move_to_pose([tx, ty, surface + hang + 0.03], tool_yaw + turn)
     move_until_contact([tx, ty, hang - 0.04], tool_yaw + turn)
+    bottom = get_ee_pose()[0][2] - hang
     suction_off()
+    placed[name] = (x, y, o['half_size'][0], bottom + 2 * o['half_size'][2])
 
 
 def put(name, x, y, yaw=None):
