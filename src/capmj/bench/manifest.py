@@ -106,6 +106,7 @@ def _asdict(v: Any) -> Any:
 def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
     """The manifest of a run of ``agent`` over ``task_objects``."""
     from capmj.agents.base import Budget
+    from capmj.sim.motion_config import MotionConfig
 
     model = getattr(agent, "model", None)
     cfg = getattr(agent, "config", None)
@@ -138,6 +139,7 @@ def build_manifest(agent: Any, task_objects: Sequence[Any]) -> dict[str, Any]:
         "price": _asdict(price),
         "cache_dir": str(cfg.cache_dir) if cfg is not None and cfg.cache_dir is not None else None,
         "hash_seed": os.environ.get("PYTHONHASHSEED"),
+        "motion": _asdict(MotionConfig()),  # every move checked and planned around obstacles, or not
         **_interaction(agent),
         **_policy(agent),
         **_api_level(agent),

@@ -56,7 +56,7 @@ ATTEMPT_FIELDS: dict[str, str] = {
     "error_line": "line of the plan the error points at, else None",
     "error_type": "the class of what failed (capmj.errors.error_facts: 'SandboxViolation', 'MotionFailed', "
                   "'IndexError', ...; only when error is set)",
-    "error_status": "the failed primitive's status for a MotionFailed ('unreachable', 'no_grip', 'wrong_object')",
+    "error_status": "the failed primitive's status for a MotionFailed ('unreachable', 'no_path', 'no_grip', 'wrong_object')",
     "failed_program": "which program failed: 'planner' or the helper LMP's name (only when error is set)",
     "api_error": "the error the plan's last API call raised, when the attempt's error is that one ({fn, error})",
     "verdict": "the reporter's verdict: True, False, or None (unknown, no reporter, or the plan failed)",
