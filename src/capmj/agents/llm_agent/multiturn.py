@@ -60,7 +60,8 @@ from capmj.tasks.protocol import episode_rng
 if TYPE_CHECKING:
     from capmj.agents.llm_agent.agent import LLMAgent
 
-__all__ = ["FINISH", "FINISHED", "Answer", "feedback_text", "parse_answer", "run_turns", "system_prompt"]
+__all__ = ["FINISH", "FINISHED", "Answer", "CameraViews", "describe_change", "feedback_text", "parse_answer", "run_turns",
+           "scene_text", "system_prompt", "text_template"]
 
 FINISH = "FINISH"
 """The word, alone on a line outside code, with which the model claims the goal holds."""
@@ -93,7 +94,7 @@ def parse_answer(text: str) -> Answer:
         return Answer(None, finish, None if finish else exc)
 
 
-def _text_template(name: str, directory: Path | None) -> str:
+def text_template(name: str, directory: Path | None) -> str:
     """A text prompt without its ``#@`` metadata lines."""
     folder = Path(directory) if directory is not None else prompts_dir()
     try:
@@ -142,7 +143,7 @@ def feedback_text(template: str, *, turn: int, left: int, output: Sequence[str],
 
 
 @dataclass
-class _Views:
+class CameraViews:
     """The cameras' RGB views of the current state as PNG bytes (by camera), rendered on demand."""
 
     ctx: EpisodeContext
@@ -169,11 +170,11 @@ class _Views:
             self.rig.close()
 
 
-def _describe(session: LMPSession, directory: Path | None, goal: str, scene: str,
-              before: Mapping[str, bytes], after: Mapping[str, bytes]) -> str:
+def describe_change(session: LMPSession, directory: Path | None, goal: str, scene: str,
+                    before: Mapping[str, bytes], after: Mapping[str, bytes]) -> str:
     """The describing call: the views before and after the turn -> what changed (recorded as the
     LMP ``describe`` of the turn)."""
-    prompt = _text_template("multiturn_describe.txt", directory)
+    prompt = text_template("multiturn_describe.txt", directory)
     content: list[dict[str, Any]] = [text_part(prompt.replace("<<GOAL>>", " ".join(goal.split()))
                                                .replace("<<OBJECTS>>", scene))]
     for name in after:
@@ -226,8 +227,8 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
     goal = ctx.scene.goal
     api = make_api(ctx, o.perception)  # one API for the episode: functions defined earlier log here too
     functions = api.functions(o.api)
-    template = _text_template("multiturn_feedback.txt", o.prompts_dir)
-    views = _Views(ctx)
+    template = text_template("multiturn_feedback.txt", o.prompts_dir)
+    views = CameraViews(ctx)
     namespace: dict[str, object] = {}
     messages: list[dict[str, Any]] = []
     raised: BaseException | None = None
@@ -277,7 +278,7 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
                         after = views.render(k, "after")
                         images = len(earlier) + len(after)
                         dsession = replace(session, complete=meter.wrap(describer.complete), check=None)
-                        described = _describe(dsession, o.prompts_dir, goal, scene, earlier, after)
+                        described = describe_change(dsession, o.prompts_dir, goal, scene, earlier, after)
                 except Exception as exc:  # noqa: BLE001 - no renderer: the feedback says so
                     llm_error = find_llm_error(exc)
                     if llm_error is None:

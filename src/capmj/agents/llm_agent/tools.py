@@ -45,7 +45,7 @@ from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.api.tool_schemas import TOOL_FUNCTIONS, tool_schemas
 from capmj.agents.attribution import api_error
 from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
-from capmj.agents.llm_agent.multiturn import FINISHED, _describe, _text_template, _Views, scene_text
+from capmj.agents.llm_agent.multiturn import FINISHED, CameraViews, describe_change, scene_text, text_template
 from capmj.agents.llm_agent.planner import question
 from capmj.agents.llm_agent.tools_calls import Call, answer_calls, run_call, says_finish
 from capmj.agents.lmp.meter import LLMMeter
@@ -237,8 +237,8 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
     api = make_api(ctx, o.perception)
     functions = api.functions()
     tools = tool_schemas()
-    template = _text_template("tools_feedback.txt", o.prompts_dir) if multi else ""
-    views = _Views(ctx)
+    template = text_template("tools_feedback.txt", o.prompts_dir) if multi else ""
+    views = CameraViews(ctx)
     messages: list[dict[str, Any]] = []
     raised: BaseException | None = None
     try:
@@ -288,7 +288,7 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
                         after = views.render(k, "after")
                         images = len(earlier) + len(after)
                         dsession = replace(session, complete=meter.wrap(describer.complete), check=None)
-                        described = _describe(dsession, o.prompts_dir, goal, scene, earlier, after)
+                        described = describe_change(dsession, o.prompts_dir, goal, scene, earlier, after)
                 except Exception as exc:  # noqa: BLE001 - no renderer: the feedback says so
                     llm_error = find_llm_error(exc)
                     if llm_error is None:
