@@ -94,6 +94,15 @@ class Motion:
         """Wall seconds spent checking and planning paths so far (for the benchmark)."""
 
     @property
+    def moves_made(self) -> int:
+        """How many moves :attr:`paths` holds: a mark for :meth:`planned_tips`."""
+        return len(self.paths)
+
+    def planned_tips(self, since: int = 0) -> tuple[Waypoints, ...]:
+        """The tool paths of the moves after mark ``since`` that were planned around an obstacle."""
+        return tuple(p.tip for p in self.paths[since:] if p.planned)
+
+    @property
     def checker(self) -> CollisionChecker:
         """The collision checker of this world (made on first use)."""
         if self._checker is None:

@@ -213,7 +213,8 @@ class RobotDriver:
         ctx.check_budget(ctx.budget.max_primitives * MOVES_PER_PRIMITIVE, "low-level moves")
         w = self.world
         start, steps0, t0 = w.tip_pose()[0], w.steps, w.time
-        motion, paths0 = self.motion, len(self.motion.paths)
+        motion = self.motion
+        mark = motion.moves_made
         watch = ContactWatch(w, self._recent)
         try:
             status = run(watch)
@@ -231,7 +232,7 @@ class RobotDriver:
             "kind": "move", "fn": fn, "obj_id": w.suction.held, "pick": tuple(float(v) for v in start),
             "place": tuple(float(v) for v in end), "final_pos": None, "steps": w.steps - steps0,
             "sim_s": w.time - t0, "message": message, "contact": touched,
-            "planned": tuple(p.tip for p in motion.paths[paths0:] if p.planned),  # drawn as lines in the .rrd
+            "planned": motion.planned_tips(mark),  # drawn as lines in the .rrd
         })
         if collided:
             raise CollisionDetected(message, status="collision")
