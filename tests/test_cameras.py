@@ -263,3 +263,19 @@ def test_render_all_renders_only_what_is_asked(rig: CameraRig) -> None:
     assert obs.heightmap is None
     assert set(obs.views) == set(rig.camera_names)
     assert all(v.seg is None and v.depth.shape == (rig.height, rig.width) for v in obs.views.values())
+
+
+def test_a_thread_that_rendered_and_lives_on_does_not_lock_the_others_out(world: World) -> None:
+    """EGL binds a context to one thread at a time: a pool thread that rendered (an episode thread
+    of --concurrency, a failed episode's thumbnail) and stays alive must leave it free."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def top() -> np.ndarray:
+        with CameraRig(world) as r:
+            return np.asarray(r.heightmap(include_robot=False).height)
+
+    with ThreadPoolExecutor(1) as pool:
+        in_thread = pool.submit(top).result()
+        in_main = top()  # the pool's thread is still alive here
+        again = pool.submit(top).result()
+    assert np.array_equal(in_thread, in_main) and np.array_equal(in_main, again)

@@ -13,18 +13,12 @@ made (no GL, a task that no longer builds) is skipped, never the episode's failu
 
 from __future__ import annotations
 
-import threading
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from capmj.atomic import atomic_write
 
 __all__ = ["make_thumbnail", "render_top_view", "write_thumbnail"]
-
-_RENDERING = threading.Lock()
-"""One render at a time per process: the episodes of a worker run in threads (``--concurrency``) and
-share one GL context, which one thread at a time may hold current."""
-
 
 def render_top_view(task: Any, seed: int, final_poses: Mapping[str, Sequence[float]]) -> Any:
     """The top-down colour image (uint8, rows = x from the robot's side, columns = y ascending) of
@@ -38,7 +32,7 @@ def render_top_view(task: Any, seed: int, final_poses: Mapping[str, Sequence[flo
     by_name = {o.name: o.obj_id for o in world.objects}
     world.place_objects({by_name[name]: Pose.of(v[:3], v[3:7]) for name, v in final_poses.items()
                          if name in by_name and by_name[name] in world.movable_ids})
-    with _RENDERING, CameraRig(world) as rig:
+    with CameraRig(world) as rig:  # drawn under the process's render lock (capmj.sim.gl)
         colour = rig.heightmap(include_robot=False).colormap  # rows = y ascending, columns = x ascending
     return colour.transpose(1, 0, 2)
 

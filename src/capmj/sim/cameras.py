@@ -40,6 +40,7 @@ import numpy as np
 from capmj.errors import ConfigError, SimError
 from capmj.sim.bounds import WORKSPACE
 from capmj.sim.camera_frames import CameraFrame, Heightmap, Observation, frozen
+from capmj.sim.gl import RENDER_LOCK, current_context, release_current
 from capmj.sim.gl import make_current as gl_make_current
 from capmj.sim.gl import register_cleanup, shared_gl_context
 from capmj.sim.image_colour import depth_to_visible, seg_to_visible, to_png
@@ -77,11 +78,15 @@ def _free_mjr(holder: dict) -> None:
     ctx = holder.pop("mjr", None)
     if ctx is None:
         return
-    if holder.get("pid") != os.getpid() or not gl_make_current():
-        # A forked child must make no GL call (Mesa deadlocks), not even in MjrContext's destructor.
-        _KEPT_AFTER_FORK.append(ctx)
-        return
-    ctx.free()
+    with RENDER_LOCK:
+        if holder.get("pid") != os.getpid() or not gl_make_current():
+            # A forked child must make no GL call (Mesa deadlocks), not even in MjrContext's destructor.
+            _KEPT_AFTER_FORK.append(ctx)
+            return
+        try:
+            ctx.free()
+        finally:
+            release_current()
 
 
 class CameraRig:
@@ -265,9 +270,10 @@ class CameraRig:
         out of view (the perceived planner API uses it; the arm stays where it is).
         """
         cid = self._camera_id(camera)
-        mjr = self._context()
-        scene = self._update(cid, hide_robot=not include_robot)
-        rgb, zbuf, ids = self._draw(scene, mjr, self.width, self.height, seg)
+        with current_context():
+            mjr = self._context()
+            scene = self._update(cid, hide_robot=not include_robot)
+            rgb, zbuf, ids = self._draw(scene, mjr, self.width, self.height, seg)
         depth = self._metric_depth(zbuf, orthographic=False)
         return CameraFrame(
             name=camera,
@@ -289,9 +295,10 @@ class CameraRig:
         m = self.model
         if self.hm_rows > m.vis.global_.offheight or self.hm_cols > m.vis.global_.offwidth:
             raise SimError(f"heightmap {self.hm_cols}x{self.hm_rows} exceeds the offscreen buffer")
-        mjr = self._context()
-        scene = self._update(self._top_id, hide_robot=not include_robot)
-        rgb, zbuf, seg = self._draw(scene, mjr, self.hm_cols, self.hm_rows)
+        with current_context():
+            mjr = self._context()
+            scene = self._update(self._top_id, hide_robot=not include_robot)
+            rgb, zbuf, seg = self._draw(scene, mjr, self.hm_cols, self.hm_rows)
         assert seg is not None
         depth = self._metric_depth(zbuf, orthographic=True)
         cam_z = float(self.data.cam_xpos[self._top_id][2])

@@ -35,9 +35,11 @@ import importlib
 import os
 import subprocess
 import sys
+import threading
 import weakref
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 from capmj.errors import RenderBackendError
 
@@ -77,6 +79,9 @@ class GLState:
 
 
 STATE = GLState()
+
+RENDER_LOCK = threading.RLock()
+"""One thread at a time draws with the process's one GL context (episodes run in threads)."""
 
 
 def library_loadable(backend: str) -> bool:
@@ -235,6 +240,30 @@ def shared_gl_context() -> Any:
         atexit.register(release_gl)  # runs before mujoco.egl's eglTerminate (registered earlier)
         STATE.atexit_registered = True
     return ctx
+
+
+def release_current() -> None:
+    """Let go of the shared context in this thread, so that another thread can make it current: an
+    EGL context is current in one thread at a time, and a thread that keeps it (a pool's worker
+    thread lives on) would lock every other thread out.  No GL call in a forked child."""
+    ctx = STATE.shared_context
+    if ctx is None or STATE.context_pid != os.getpid() or type(ctx).__module__ != "mujoco.egl":
+        return
+    egl = sys.modules["mujoco.egl"]
+    egl.EGL.eglMakeCurrent(egl.EGL_DISPLAY, egl.EGL.EGL_NO_SURFACE, egl.EGL.EGL_NO_SURFACE, egl.EGL.EGL_NO_CONTEXT)
+
+
+@contextmanager
+def current_context() -> Iterator[Any]:
+    """The shared context, current in this thread for the block's GL calls and released after them,
+    one thread at a time (:data:`RENDER_LOCK`).  Raises :class:`RenderBackendError` as
+    :func:`shared_gl_context` does."""
+    with RENDER_LOCK:
+        ctx = shared_gl_context()
+        try:
+            yield ctx
+        finally:
+            release_current()
 
 
 def make_current() -> bool:
