@@ -53,5 +53,7 @@ def test_wrong_outside_plan_fails(name):
     code = (PLANS / "wrong" / f"{name}.py").read_text(encoding="utf-8")
     assert code.startswith("# WRONG PLAN")
     r = run_outside(name, SEEDS[0], plan=code)
-    assert r.error is None, r.error  # it runs: the judge, not the sandbox, rejects it
+    # It runs and the judge rejects it; or, where it puts a block into an object (a fixture's wall),
+    # the motion refuses that place before moving (no_path), never the sandbox.
+    assert r.error is None or (r.error_type == "MotionFailed" and r.error_status == "no_path"), r.error
     assert not r.success and r.diagnostics
