@@ -43,9 +43,16 @@ def prompts_dirs() -> list[Path]:
     return dirs
 
 
+HELPERS = "_helpers.py"
+"""A file of a plan folder run before each plan file of that folder (the low level's pick and place
+are written once, from guarded moves and the suction, for all its plans)."""
+
+
 def reference_plan(task, api: str = "high") -> tuple[str, str]:
-    """``(code, source)`` of the reference plan of a task at an API level (``high`` or ``low``);
-    raises AgentError when there is none."""
+    """``(code, source)`` of the reference plan of a task at an API level (``high`` or ``low``):
+    the task's own ``reference_plan[_low]`` attribute, else ``reference[/low]/<task>.py`` of the
+    prompt folders, preceded by the folder's :data:`HELPERS` when it has one; raises AgentError when
+    there is none."""
     if api not in LEVELS:
         raise ConfigError(f"unknown API level {api!r}; valid levels: {', '.join(LEVELS)}")
     attr = "reference_plan" if api == "high" else f"reference_plan_{api}"
@@ -59,7 +66,9 @@ def reference_plan(task, api: str = "high") -> tuple[str, str]:
         path = d / folder / f"{name}.py"
         tried.append(str(path))
         if path.is_file():
-            return path.read_text(encoding="utf-8"), str(path)
+            helpers = path.parent / HELPERS
+            shared = helpers.read_text(encoding="utf-8") + "\n\n" if helpers.is_file() else ""
+            return shared + path.read_text(encoding="utf-8"), str(path)
     raise AgentError(f"no reference plan for task {name!r}; looked for {', '.join(tried)} "
                      f"and a {attr!r} attribute on the task")
 
