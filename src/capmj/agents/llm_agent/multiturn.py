@@ -60,8 +60,8 @@ from capmj.tasks.protocol import episode_rng
 if TYPE_CHECKING:
     from capmj.agents.llm_agent.agent import LLMAgent
 
-__all__ = ["FINISH", "FINISHED", "Answer", "CameraViews", "describe_change", "feedback_text", "parse_answer", "run_turns",
-           "scene_text", "system_prompt", "text_template"]
+__all__ = ["FINISH", "FINISHED", "Answer", "CameraViews", "ViewsFeedback", "describe_change", "feedback_text",
+           "parse_answer", "run_turns", "scene_text", "system_prompt", "text_template", "views_feedback"]
 
 FINISH = "FINISH"
 """The word, alone on a line outside code, with which the model claims the goal holds."""
@@ -185,6 +185,44 @@ def describe_change(session: LMPSession, directory: Path | None, goal: str, scen
     return session.ask(call, [{"role": "user", "content": content}]).strip()
 
 
+@dataclass(frozen=True)
+class ViewsFeedback:
+    """What ``--feedback image|describe`` adds after a turn (:func:`views_feedback`)."""
+
+    parts: list[dict[str, Any]]
+    """The image parts of the message (``image``), each camera's view after its caption."""
+    images: int
+    """Images sent: the views (``image``) or the before and after views described (``describe``)."""
+    described: str | None
+    """The describing call's account (``describe``), or why there are no views."""
+    llm_error: LLMError | None
+    """The describing call's LLM error, which ends the episode as any LLM error does."""
+
+
+def views_feedback(feedback: str | None, views: CameraViews, turn: int, goal: str, scene: str, directory: Path | None,
+                   describer: LMPSession) -> ViewsFeedback:
+    """The views after ``turn`` as image parts (``image``) or as the change the ``describer`` session
+    describes (``describe``); nothing for ``text``.  A renderer that fails is said in the text."""
+    parts: list[dict[str, Any]] = []
+    images, described = 0, None
+    try:
+        if feedback == "image":
+            for name, png in views.render(turn, "after").items():
+                parts += [text_part(f"Camera {name} after turn {turn}:"), image_part(png)]
+            images = len(parts) // 2
+        elif feedback == "describe":
+            earlier = dict(views.last)
+            after = views.render(turn, "after")
+            images = len(earlier) + len(after)
+            described = describe_change(describer, directory, goal, scene, earlier, after)
+    except Exception as exc:  # noqa: BLE001 - no renderer: the feedback says so
+        llm_error = find_llm_error(exc)
+        if llm_error is not None:
+            return ViewsFeedback(parts, images, described, llm_error)
+        described = f"(no camera views: {describe(exc)})"
+    return ViewsFeedback(parts, images, described, None)
+
+
 def run_turns(agent: LLMAgent, ctx: EpisodeContext,
               check: Callable[[LMPSession, EpisodeContext], Callable[..., Any]] | None = None) -> None:
     """Run one episode of ``agent`` (``options.interaction == "multi"``) in turns; fills
@@ -267,22 +305,9 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
                 agreed = predicate[0] is True
             if not (answer.finish or k == o.max_turns or over is not None or llm_error is not None):
                 scene = scene_text(api)
-                parts: list[dict[str, Any]] = []
-                try:
-                    if o.feedback == "image":
-                        for name, png in views.render(k, "after").items():
-                            parts += [text_part(f"Camera {name} after turn {k}:"), image_part(png)]
-                        images = len(parts) // 2
-                    elif o.feedback == "describe":
-                        earlier = dict(views.last)
-                        after = views.render(k, "after")
-                        images = len(earlier) + len(after)
-                        dsession = replace(session, complete=meter.wrap(describer.complete), check=None)
-                        described = describe_change(dsession, o.prompts_dir, goal, scene, earlier, after)
-                except Exception as exc:  # noqa: BLE001 - no renderer: the feedback says so
-                    llm_error = find_llm_error(exc)
-                    if llm_error is None:
-                        described = f"(no camera views: {describe(exc)})"
+                seen = views_feedback(o.feedback, views, k, goal, scene, o.prompts_dir,
+                                      replace(session, complete=meter.wrap(describer.complete), check=None))
+                parts, images, described, llm_error = seen.parts, seen.images, seen.described, seen.llm_error
                 over = meter.exceeded or agent.helper_cap.exceeded
                 if llm_error is None and over is None:
                     error_line = error.line if isinstance(error, PlanError) else None

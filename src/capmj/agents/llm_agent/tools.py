@@ -45,7 +45,7 @@ from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.api.tool_schemas import TOOL_FUNCTIONS, tool_schemas
 from capmj.agents.attribution import api_error
 from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
-from capmj.agents.llm_agent.multiturn import FINISHED, CameraViews, describe_change, scene_text, text_template
+from capmj.agents.llm_agent.multiturn import FINISHED, CameraViews, scene_text, text_template, views_feedback
 from capmj.agents.llm_agent.planner import question
 from capmj.agents.llm_agent.tools_calls import Call, answer_calls, run_call, says_finish
 from capmj.agents.lmp.meter import LLMMeter
@@ -53,7 +53,7 @@ from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_ll
 from capmj.agents.prompt_files import load_prompt
 from capmj.errors import (BudgetExceeded, LLMBudgetExceeded, LLMError, ToolCallingUnsupported, ToolsRejected, describe,
                           error_facts)
-from capmj.llm import LLMClient, ToolCall, image_part, text_part
+from capmj.llm import LLMClient, ToolCall, text_part
 from capmj.llm.provider import import_litellm, short
 from capmj.llm.records import Completion
 from capmj.records import AttemptRecord, LLMNotes, ToolCallRecord
@@ -277,22 +277,9 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
             images = 0
             if multi and not (ran.finish or k == max_turns or over is not None or llm_error is not None):
                 scene = scene_text(api)
-                parts: list[dict[str, Any]] = []
-                try:
-                    if o.feedback == "image":
-                        for name, png in views.render(k, "after").items():
-                            parts += [text_part(f"Camera {name} after turn {k}:"), image_part(png)]
-                        images = len(parts) // 2
-                    elif o.feedback == "describe":
-                        earlier = dict(views.last)
-                        after = views.render(k, "after")
-                        images = len(earlier) + len(after)
-                        dsession = replace(session, complete=meter.wrap(describer.complete), check=None)
-                        described = describe_change(dsession, o.prompts_dir, goal, scene, earlier, after)
-                except Exception as exc:  # noqa: BLE001 - no renderer: the feedback says so
-                    llm_error = find_llm_error(exc)
-                    if llm_error is None:
-                        described = f"(no camera views: {describe(exc)})"
+                seen = views_feedback(o.feedback, views, k, goal, scene, o.prompts_dir,
+                                      replace(session, complete=meter.wrap(describer.complete), check=None))
+                parts, images, described, llm_error = seen.parts, seen.images, seen.described, seen.llm_error
                 over = meter.exceeded or agent.helper_cap.exceeded
                 if llm_error is None and over is None:
                     feedback = _feedback(template, k, max_turns - k, scene, described)
