@@ -108,6 +108,18 @@ class LLMAgent:
     def _client(self) -> LLMClient:
         return LLMClient(self.config)
 
+    def begin_episode(self, ctx: EpisodeContext) -> tuple[LLMClient, LLMMeter, list[LMPCall]]:
+        """The episode's client, LLM meter (its per-episode limits, in ``ctx.notes["llm_calls"]``),
+        helper-call cap and transcript, made anew and kept on the agent: the start of every loop form."""
+        o = self.options
+        client = self.client = self._client()
+        meter = self.meter = LLMMeter(self.model, price=o.price, max_tokens=o.episode_max_tokens,
+                                      max_cost_usd=o.episode_max_cost_usd)
+        self.helper_cap = HelperCallCap(o.episode_max_helper_calls)  # all attempts of the episode together
+        ctx.notes["llm_calls"] = meter.calls
+        self.transcript = []
+        return client, meter, self.transcript
+
     # ------------------------------------------------------------------ the loop
     def act(self, ctx: EpisodeContext) -> None:
         if self.options.policy == "tools":  # function calls in turns: its own module
@@ -116,14 +128,8 @@ class LLMAgent:
         if self.options.interaction == "multi":  # turns of code with feedback: its own module
             run_turns(self, ctx, check=plan_check)
             return
-        client = self.client = self._client()
         o = self.options
-        meter = self.meter = LLMMeter(self.model, price=o.price, max_tokens=o.episode_max_tokens,
-                                      max_cost_usd=o.episode_max_cost_usd)
-        self.helper_cap = HelperCallCap(o.episode_max_helper_calls)  # all attempts of the episode together
-        ctx.notes["llm_calls"] = meter.calls
-        transcript: list[LMPCall] = []
-        self.transcript = transcript
+        client, meter, transcript = self.begin_episode(ctx)
         attempts: list[AttemptRecord] = []
         stopped: str | None = None
         ctx.notes["llm"] = self._notes(client, attempts)

@@ -47,8 +47,7 @@ from capmj.agents.attribution import api_error, failed_program
 from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
 from capmj.agents.llm_agent.levels import LevelSession
 from capmj.agents.llm_agent.planner import question
-from capmj.agents.lmp.meter import LLMMeter
-from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
+from capmj.agents.lmp.session import LMPCall, LMPSession, find_llm_error
 from capmj.agents.prompt_files import load_prompt, object_names, prompts_dir
 from capmj.agents.sandbox import extract_code, run_code
 from capmj.errors import ConfigError, LLMError, NoCodeError, PlanError, describe, error_facts
@@ -60,7 +59,8 @@ from capmj.tasks.protocol import episode_rng
 if TYPE_CHECKING:
     from capmj.agents.llm_agent.agent import LLMAgent
 
-__all__ = ["FINISH", "FINISHED", "Answer", "CameraViews", "ViewsFeedback", "describe_change", "feedback_text",
+__all__ = ["FINISH", "FINISHED", "Answer", "CameraViews", "ViewsFeedback", "counting_describer", "describe_change", "describing_client",
+           "feedback_text",
            "parse_answer", "run_turns", "scene_text", "system_prompt", "text_template", "views_feedback"]
 
 FINISH = "FINISH"
@@ -223,6 +223,27 @@ def views_feedback(feedback: str | None, views: CameraViews, turn: int, goal: st
     return ViewsFeedback(parts, images, described, None)
 
 
+def describing_client(agent: LLMAgent, client: LLMClient) -> LLMClient:
+    """The client of ``--feedback describe``'s second call: one of ``--describe-model`` when it names
+    another model than the agent's, else the agent's own ``client``."""
+    o = agent.options
+    if o.feedback == "describe" and o.describe_model not in (None, agent.config.model):
+        return LLMClient(replace(agent.config, model=str(o.describe_model)))
+    return client
+
+
+def counting_describer(notes: LLMNotes, client: LLMClient, describer: LLMClient) -> LLMNotes:
+    """``notes`` with a separate describing client's calls counted as the episode's."""
+    if describer is client:
+        return notes
+    d = describer.usage()
+    return replace(notes, calls=notes.calls + d.calls, cached_calls=notes.cached_calls + d.cached_calls,
+                   failed_calls=notes.failed_calls + d.failed_calls,
+                   prompt_tokens=notes.prompt_tokens + d.prompt_tokens,
+                   completion_tokens=notes.completion_tokens + d.completion_tokens,
+                   cost_usd=round(notes.cost_usd + d.cost_usd, 8), latency_s=round(notes.latency_s + d.latency_s, 3))
+
+
 def run_turns(agent: LLMAgent, ctx: EpisodeContext,
               check: Callable[[LMPSession, EpisodeContext], Callable[..., Any]] | None = None) -> None:
     """Run one episode of ``agent`` (``options.interaction == "multi"``) in turns; fills
@@ -233,16 +254,8 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
     o = agent.options
     assert o.max_turns is not None and o.feedback is not None  # normalised by LLMAgentOptions for multi
     max_turns: int = o.max_turns
-    client = agent.client = agent._client()
-    describer = client
-    if o.feedback == "describe" and o.describe_model not in (None, agent.config.model):
-        describer = LLMClient(replace(agent.config, model=str(o.describe_model)))
-    meter = agent.meter = LLMMeter(agent.model, price=o.price, max_tokens=o.episode_max_tokens,
-                                   max_cost_usd=o.episode_max_cost_usd)
-    agent.helper_cap = HelperCallCap(o.episode_max_helper_calls)
-    ctx.notes["llm_calls"] = meter.calls
-    transcript: list[LMPCall] = []
-    agent.transcript = transcript
+    client, meter, transcript = agent.begin_episode(ctx)
+    describer = describing_client(agent, client)
     turns: list[AttemptRecord] = []
     stopped: str | None = None
     agreed: bool | None = None
@@ -250,13 +263,7 @@ def run_turns(agent: LLMAgent, ctx: EpisodeContext,
 
     def notes() -> LLMNotes:
         out = agent._notes(client, turns, stopped, meter.summary() if stopped is not None else None)
-        if describer is not client:  # the describing model's calls count as the episode's
-            d = describer.usage()
-            out = replace(out, calls=out.calls + d.calls, cached_calls=out.cached_calls + d.cached_calls,
-                          failed_calls=out.failed_calls + d.failed_calls,
-                          prompt_tokens=out.prompt_tokens + d.prompt_tokens,
-                          completion_tokens=out.completion_tokens + d.completion_tokens,
-                          cost_usd=round(out.cost_usd + d.cost_usd, 8), latency_s=round(out.latency_s + d.latency_s, 3))
+        out = counting_describer(out, client, describer)
         return replace(out, max_attempts=max_turns, interaction="multi", feedback=o.feedback,
                        max_turns=max_turns, finish_agreed=agreed)
 

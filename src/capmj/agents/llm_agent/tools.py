@@ -45,15 +45,15 @@ from capmj.agents.api.planner_api import PlannerAPI
 from capmj.agents.api.tool_schemas import TOOL_FUNCTIONS, tool_schemas
 from capmj.agents.attribution import api_error
 from capmj.agents.base import JUDGE_SETTLE_STEPS, EpisodeContext
-from capmj.agents.llm_agent.multiturn import FINISHED, CameraViews, scene_text, text_template, views_feedback
+from capmj.agents.llm_agent.multiturn import (FINISHED, CameraViews, counting_describer, describing_client, scene_text,
+                                              text_template, views_feedback)
 from capmj.agents.llm_agent.planner import question
 from capmj.agents.llm_agent.tools_calls import Call, answer_calls, run_call, says_finish
-from capmj.agents.lmp.meter import LLMMeter
-from capmj.agents.lmp.session import HelperCallCap, LMPCall, LMPSession, find_llm_error
+from capmj.agents.lmp.session import LMPCall, LMPSession, find_llm_error
 from capmj.agents.prompt_files import load_prompt
 from capmj.errors import (BudgetExceeded, LLMBudgetExceeded, LLMError, ToolCallingUnsupported, ToolsRejected, describe,
                           error_facts)
-from capmj.llm import LLMClient, ToolCall, text_part
+from capmj.llm import ToolCall, text_part
 from capmj.llm.provider import import_litellm, short
 from capmj.llm.records import Completion
 from capmj.records import AttemptRecord, LLMNotes, ToolCallRecord
@@ -203,30 +203,16 @@ def run_tool_turns(agent: LLMAgent, ctx: EpisodeContext) -> None:
     assert o.max_turns is not None  # normalised by LLMAgentOptions for tools
     max_turns: int = o.max_turns
     multi = o.interaction == "multi"
-    client = agent.client = agent._client()
-    describer = client
-    if o.feedback == "describe" and o.describe_model not in (None, agent.config.model):
-        describer = LLMClient(replace(agent.config, model=str(o.describe_model)))
+    client, meter, transcript = agent.begin_episode(ctx)
+    describer = describing_client(agent, client)
     clients = (client,) if describer is client else (client, describer)
-    meter = agent.meter = LLMMeter(agent.model, price=o.price, max_tokens=o.episode_max_tokens,
-                                   max_cost_usd=o.episode_max_cost_usd)
-    agent.helper_cap = HelperCallCap(o.episode_max_helper_calls)
-    ctx.notes["llm_calls"] = meter.calls
-    transcript: list[LMPCall] = []
-    agent.transcript = transcript
     turns: list[AttemptRecord] = []
     stopped: str | None = None
     agreed: bool | None = None
 
     def notes() -> LLMNotes:
         out = agent._notes(client, turns, stopped, meter.summary() if stopped is not None else None)
-        for other in clients[1:]:  # the describing model's calls count as the episode's
-            d = other.usage()
-            out = replace(out, calls=out.calls + d.calls, cached_calls=out.cached_calls + d.cached_calls,
-                          failed_calls=out.failed_calls + d.failed_calls,
-                          prompt_tokens=out.prompt_tokens + d.prompt_tokens,
-                          completion_tokens=out.completion_tokens + d.completion_tokens,
-                          cost_usd=round(out.cost_usd + d.cost_usd, 8), latency_s=round(out.latency_s + d.latency_s, 3))
+        out = counting_describer(out, client, describer)
         return replace(out, max_attempts=max_turns, interaction="multi" if multi else None,
                        feedback=o.feedback if multi else None, max_turns=max_turns, finish_agreed=agreed,
                        policy="tools")
