@@ -200,15 +200,22 @@ def _loop_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[
     return out
 
 
-def _turns_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
-    """The multi-turn table (``--interaction multi`` cells only; empty without any)."""
-    cells: list[tuple[str, str, Mapping[str, Any], Mapping[str, Any]]] = []
+def _loop_cells(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str], key: str
+                ) -> list[tuple[str, str, Mapping[str, Any], Mapping[str, Any]]]:
+    """(task, configuration, the cell's ``loop[key]``, the cell) of the cells that have ``loop[key]``."""
+    cells = []
     for t, per in rows:
         for lab in labels:
             st = per.get(lab) or {}
-            tp = (st.get("loop") or {}).get("turns")
+            tp = (st.get("loop") or {}).get(key)
             if tp:
                 cells.append((t, lab, tp, st))
+    return cells
+
+
+def _turns_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
+    """The multi-turn table (``--interaction multi`` cells only; empty without any)."""
+    cells = _loop_cells(rows, labels, "turns")
     if not cells:
         return []
     out = ["", "## Multi-turn (LLM agent, --interaction multi)", "",
@@ -227,8 +234,7 @@ def _turns_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence
 
 def _tools_table(rows: Sequence[tuple[str, Mapping[str, Any]]], labels: Sequence[str]) -> list[str]:
     """The tool-calling table (``--policy tools`` cells only, ``loop.tools``; empty without any)."""
-    cells = [(t, lab, tp, st) for t, per in rows for lab in labels
-             for st in [per.get(lab) or {}] for tp in [(st.get("loop") or {}).get("tools")] if tp]
+    cells = _loop_cells(rows, labels, "tools")
     if not cells:
         return []
     out = ["", "## Tool calling (LLM agent, --policy tools)", "",
